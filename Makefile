@@ -1,0 +1,68 @@
+# Two commands matter: `make run` and `make test` (see README.md).
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+PORT ?= 8000
+PYTEST_ARGS ?=
+
+.PHONY: run worker beat test test-analysis lint format bench fuzz migrate demo clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip setuptools wheel
+
+# Reinstall only when the dependency list changes.
+$(VENV)/.stamp-python: pyproject.toml | $(BIN)/python
+	$(BIN)/pip install --quiet -e '.[dev]'
+	touch $@
+
+$(VENV)/.stamp-bench: pyproject.toml | $(VENV)/.stamp-python
+	$(BIN)/pip install --quiet -e '.[dev,bench]'
+	touch $@
+
+node_modules/.stamp: package.json package-lock.json
+	npm ci --no-audit --no-fund --loglevel=error
+	touch $@
+
+deps: $(VENV)/.stamp-python node_modules/.stamp
+
+migrate: deps
+	$(BIN)/python manage.py migrate --noinput
+
+demo: migrate
+	$(BIN)/python manage.py load_demo
+
+run: demo
+	$(BIN)/python manage.py runserver 127.0.0.1:$(PORT)
+
+worker: deps
+	$(BIN)/celery -A workers worker --loglevel=INFO --concurrency=$${WORKER_CONCURRENCY:-2}
+
+beat: deps
+	$(BIN)/celery -A workers beat --loglevel=INFO
+
+test: deps
+	$(BIN)/python -m pytest $(PYTEST_ARGS)
+
+test-analysis: $(VENV)/.stamp-python
+	$(BIN)/python -m pytest tests/analysis -p no:django $(PYTEST_ARGS)
+
+lint: $(VENV)/.stamp-python
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
+
+format: $(VENV)/.stamp-python
+	$(BIN)/ruff format .
+	$(BIN)/ruff check --fix .
+
+bench: $(VENV)/.stamp-bench
+	$(BIN)/python -m bench.bench_bvh
+
+# Long fuzzing run of the BVH parser (the suite runs a short fixed-seed version).
+fuzz: $(VENV)/.stamp-python
+	FUZZ_EXAMPLES=$${FUZZ_EXAMPLES:-20000} $(BIN)/python -m pytest tests/analysis/test_bvh_fuzz.py -p no:django -q
+
+clean:
+	rm -rf $(VENV) node_modules staticfiles .pytest_cache .mypy_cache .ruff_cache

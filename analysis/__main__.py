@@ -1,0 +1,5 @@
+"""Command line: ``python -m analysis build-model …`` and ``python -m analysis analyse …``."""
+
+from analysis.cli import main
+
+raise SystemExit(main())

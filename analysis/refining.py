@@ -1,0 +1,402 @@
+"""Landmark refining (paper 004, section 5.5, eqs 5.27–5.33).
+
+Candidate landmarks come in bursts of neighbouring frames around each key pose. Refining groups
+them into clusters (EM = Gaussian mixture, k-means, or the temporal rule T_c of eq 5.29) and keeps
+one candidate per cluster: μ1 the member closest to the tutor's mean signature for its own type,
+μ2 the member of the cluster's majority type closest to that type's tutor mean (eq 5.30).
+
+EM and k-means cluster the candidates on (frame, signature values at the frame): the thesis's
+Weka observations carry the frame number (Figure 5.6), and without it one cluster would gather the
+same pose from every repetition. The frame is given in frames, not rescaled, so time dominates.
+The number of clusters, when not given, is the number of runs of candidates separated by more
+than β frames (k-means), or the Bayesian-information-criterion best of a few counts around it (EM,
+standing in for Weka's cross-validated choice).
+
+Ours, beside the thesis (see docs: eval_landmarks for what each one brings):
+
+- "gap" clustering: a new cluster wherever two candidates are more than β frames apart (eq 5.29's
+  ratio rule keeps evenly spaced single candidates in one cluster); "extreme" selection.
+- `regularise`: grammar-constrained typing of the refined landmarks by dynamic programming: keep,
+  retype, drop or insert landmarks so that consecutive types follow the transitions seen in the
+  training sequences, at the least pose cost.
+- `relocate`: landmark types that the training data shows at the pose farthest from the
+  preceding landmark (an "end of range") are moved to that pose.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+from sklearn.cluster import KMeans
+from sklearn.mixture import GaussianMixture
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+Clustering = Literal["em", "kmeans", "tc", "gap"]
+Selection = Literal["mu1", "mu2", "extreme"]
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """Landmarks as frames (n,) increasing and their types (n,) ≥ 1 (eq 5.23's χ, 5.27's χ̄)."""
+
+    frames: IntArray
+    types: IntArray
+
+
+@dataclass(frozen=True)
+class RefineOptions:
+    """clustering: "em", "kmeans", "tc" (eq 5.29's ratio rule) or "gap" (a new cluster wherever
+    two consecutive candidates are more than β frames apart); selection: "mu1", "mu2" or
+    "extreme"; beta: β in frames (Table 5.1: 12–15); n_clusters: fixed count for EM/k-means or
+    None; em_span: how many counts on each side of the gap estimate EM tries."""
+
+    clustering: Clustering = "em"
+    selection: Selection = "mu1"
+    beta: float = 12.0
+    n_clusters: int | None = None
+    em_span: int = 2
+    seed: int = 0
+
+
+def mean_poses(
+    signature: FloatArray, frames: npt.ArrayLike, types: npt.ArrayLike
+) -> dict[int, FloatArray]:
+    """Eq 5.30: the mean signature row P̄ over the landmarks of each type: {type: (k,)}."""
+    frames = np.asarray(frames, dtype=np.int64)
+    types = np.asarray(types, dtype=np.int64)
+    return {int(t): signature[frames[types == t]].mean(axis=0) for t in np.unique(types)}
+
+
+def temporal_clusters(frames: npt.ArrayLike, beta: float) -> IntArray:
+    """Eq 5.29: T_c, cluster ids 1, 2, … of frames sorted in time.
+
+    A new cluster starts at χ_i (i ≥ 3) when (f_i − f_{i−1}) / (f_{i−1} − f_{i−2}) > β; χ_1 and χ_2
+    always share the first cluster.
+    """
+    f = np.asarray(frames, dtype=np.float64)
+    ids = np.ones(f.size, dtype=np.int64)
+    if f.size < 3:
+        return ids
+    gaps = np.diff(f)
+    ratio = gaps[1:] / np.maximum(gaps[:-1], 1e-12)
+    ids[2:] += np.cumsum(ratio > beta)
+    return ids
+
+
+def gap_clusters(frames: npt.ArrayLike, beta: float) -> IntArray:
+    """Cluster ids 1, 2, … of frames sorted in time, a new one after every gap larger than β."""
+    f = np.asarray(frames, dtype=np.float64)
+    ids = np.ones(f.size, dtype=np.int64)
+    ids[1:] += np.cumsum(np.diff(f) > beta)
+    return ids
+
+
+def _points(candidates: Candidates, signature: FloatArray) -> FloatArray:
+    return np.column_stack([candidates.frames.astype(np.float64), signature[candidates.frames]])
+
+
+def kmeans_clusters(points: FloatArray, n_clusters: int, seed: int) -> IntArray:
+    """k-means labels (n,) of the candidate points (n, 1 + k)."""
+    k = max(1, min(n_clusters, points.shape[0]))
+    model = KMeans(n_clusters=k, n_init=3, random_state=seed)
+    return np.asarray(model.fit_predict(points), dtype=np.int64)
+
+
+def em_clusters(points: FloatArray, counts: list[int], seed: int) -> IntArray:
+    """EM (Gaussian mixture, diagonal covariances) labels (n,), the count chosen by BIC."""
+    best: tuple[float, IntArray] | None = None
+    for k in sorted({max(1, min(c, points.shape[0])) for c in counts}):
+        model = GaussianMixture(k, covariance_type="diag", reg_covar=1e-3, random_state=seed)
+        model.fit(points)
+        bic = float(model.bic(points))
+        if best is None or bic < best[0]:
+            best = (bic, np.asarray(model.predict(points), dtype=np.int64))
+    assert best is not None
+    return best[1]
+
+
+def cluster(candidates: Candidates, signature: FloatArray, options: RefineOptions) -> IntArray:
+    """Eq 5.28: a cluster label for every candidate (n,)."""
+    frames = candidates.frames
+    if frames.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if options.clustering == "tc":
+        return temporal_clusters(frames, options.beta)
+    estimate = int(gap_clusters(frames, options.beta)[-1])
+    if options.clustering == "gap":
+        return gap_clusters(frames, options.beta)
+    k = options.n_clusters or estimate
+    points = _points(candidates, signature)
+    if options.clustering == "kmeans":
+        return kmeans_clusters(points, k, options.seed)
+    span = 0 if options.n_clusters else options.em_span
+    return em_clusters(points, list(range(k - span, k + span + 1)), options.seed)
+
+
+def _distances(
+    candidates: Candidates, signature: FloatArray, means: dict[int, FloatArray], types: IntArray
+) -> FloatArray:
+    """Euclidean distance of each candidate's signature to the tutor mean of the given type."""
+    out = np.full(types.size, np.inf)
+    for t in np.unique(types):
+        rows = types == t
+        if int(t) in means:
+            out[rows] = np.linalg.norm(signature[candidates.frames[rows]] - means[int(t)], axis=1)
+    return out
+
+
+def _extremeness(
+    candidates: Candidates, signature: FloatArray, means: dict[int, FloatArray]
+) -> FloatArray:
+    """Minus how far each candidate goes toward its type's tutor mean, away from the other types'
+    means (projection on P̄_τ − mean of the other P̄): lower = more extreme. A patient whose range
+    falls short of (or beyond) the tutor's still has the key pose at the extreme of that axis,
+    where the member closest to the tutor's mean (μ1) may lie before or after it."""
+    out = _distances(candidates, signature, means, candidates.types)
+    for t in np.unique(candidates.types):
+        others = [m for k, m in means.items() if k != int(t)]
+        if int(t) not in means or not others:
+            continue
+        axis = means[int(t)] - np.mean(others, axis=0)
+        rows = candidates.types == t
+        out[rows] = -signature[candidates.frames[rows]] @ (axis / max(np.linalg.norm(axis), 1e-12))
+    return out
+
+
+def select(
+    candidates: Candidates,
+    labels: IntArray,
+    signature: FloatArray,
+    means: dict[int, FloatArray],
+    selection: Selection,
+) -> Candidates:
+    """Eqs 5.31 (μ1) and 5.32–5.33 (μ2): one landmark per cluster, sorted by frame.
+
+    μ1: the member closest to the tutor's mean signature of the member's own type.
+    μ2: the cluster's most frequent type Ξ (ties: the smaller type), then among members of type Ξ
+    the one closest to the tutor's mean of Ξ.
+    "extreme" (ours): the member of the majority type that goes farthest along its type's axis.
+    """
+    frames, types = [], []
+    if selection == "extreme":
+        dist = _extremeness(candidates, signature, means)
+    else:
+        dist = _distances(candidates, signature, means, candidates.types)
+    for label in np.unique(labels):
+        members = np.flatnonzero(labels == label)
+        if selection in ("mu2", "extreme"):
+            values, counts = np.unique(candidates.types[members], return_counts=True)
+            members = members[candidates.types[members] == values[np.argmax(counts)]]
+        best = members[np.argmin(dist[members])]
+        frames.append(int(candidates.frames[best]))
+        types.append(int(candidates.types[best]))
+    order = np.argsort(frames, kind="stable")
+    return Candidates(
+        np.asarray(frames, dtype=np.int64)[order], np.asarray(types, dtype=np.int64)[order]
+    )
+
+
+def refine(
+    candidates: Candidates,
+    signature: FloatArray,
+    means: dict[int, FloatArray],
+    options: RefineOptions = RefineOptions(),
+) -> Candidates:
+    """Eq 5.27: cluster the candidates and keep one per cluster.
+
+    signature: (F, k) of the performance; means: the tutor's mean signature per type (eq 5.30,
+    from `mean_poses` on the tutor's signature and ground-truth landmarks).
+    """
+    labels = cluster(candidates, signature, options)
+    return select(candidates, labels, signature, means, options.selection)
+
+
+def transitions(sequences: list[npt.ArrayLike], n_types: int) -> npt.NDArray[np.bool_]:
+    """Which landmark type may follow which, from training sequences: (T + 1, T + 1) booleans
+    indexed by type (row: previous, column: next; index 0 unused)."""
+    allowed = np.zeros((n_types + 1, n_types + 1), dtype=bool)
+    for seq in sequences:
+        s = np.asarray(seq, dtype=np.int64)
+        allowed[s[:-1], s[1:]] = True
+    return allowed
+
+
+def _spread(poses: FloatArray, origin: int, frames: IntArray) -> FloatArray:
+    """Mean over joints of the distance of each pose in ``frames`` to the pose at ``origin``."""
+    return np.linalg.norm(poses[frames] - poses[origin], axis=-1).mean(axis=-1)
+
+
+def farthest_frame(poses: FloatArray, previous: int, following: int) -> int:
+    """The frame strictly between two landmarks whose pose is farthest from the first one's.
+
+    poses: (F, J, k) e.g. root-relative positions. Returns ``previous + 1`` when there is no room.
+    """
+    frames = np.arange(previous + 1, max(following, previous + 2), dtype=np.int64)
+    frames = frames[frames < poses.shape[0]]
+    return int(frames[np.argmax(_spread(poses, previous, frames))]) if frames.size else previous
+
+
+def farthest_types(
+    samples: list[tuple[FloatArray, IntArray, IntArray]], tolerance: int = 2, share: float = 0.8
+) -> set[int]:
+    """Landmark types that mark an extreme pose (ours): in the training samples (poses (F, J, k),
+    frames, types), at least ``share`` of their landmarks lie within ``tolerance`` frames of the
+    pose farthest from the preceding landmark (before the next one), e.g. an "end of range"."""
+    hits: dict[int, list[bool]] = {}
+    for poses, frames, types in samples:
+        for k in range(1, len(frames) - 1):
+            best = farthest_frame(poses, int(frames[k - 1]), int(frames[k + 1]))
+            hits.setdefault(int(types[k]), []).append(abs(best - int(frames[k])) <= tolerance)
+    return {t for t, h in hits.items() if np.mean(h) >= share}
+
+
+def relocate(landmarks: Candidates, poses: FloatArray, types: set[int]) -> Candidates:
+    """Move every inner landmark of the given types to the farthest pose from its predecessor
+    (between its neighbours); the others stay. Returns landmarks sorted by frame."""
+    frames = landmarks.frames.copy()
+    for k in range(1, frames.size - 1):
+        if int(landmarks.types[k]) in types:
+            frames[k] = farthest_frame(poses, int(frames[k - 1]), int(frames[k + 1]))
+    return Candidates(frames, landmarks.types.copy())
+
+
+@dataclass(frozen=True)
+class GrammarOptions:
+    """Grammar-constrained typing of refined landmarks (ours).
+
+    retype: cost of giving a landmark another type than the classifier's; delete: cost of dropping
+    one; insert: cost of adding a missing landmark between two kept ones (plus its pose cost);
+    lookback: how many landmarks in a row may be dropped at most.
+    """
+
+    retype: float = 0.5
+    delete: float = 2.0
+    insert: float = 0.5
+    lookback: int = 4
+
+
+def pose_distances(signature: FloatArray, means: dict[int, FloatArray], width: int) -> FloatArray:
+    """(F, width) squared distance per signature dimension of every frame to each type's tutor
+    mean (eq 5.30); inf for types without a mean."""
+    out = np.full((signature.shape[0], width), np.inf)
+    for t, m in means.items():
+        if t < width:
+            out[:, t] = np.sum((signature - m) ** 2, axis=1) / max(signature.shape[1], 1)
+    return out
+
+
+def pose_costs(distances: FloatArray) -> FloatArray:
+    """Cost of each frame as each type: `pose_distances` minus the frame's smallest one, so that a
+    frame costs nothing as its best-fitting type (a patient far from every tutor pose is not
+    dropped for that)."""
+    return distances - distances.min(axis=1, keepdims=True)
+
+
+def _bridges(
+    distances: FloatArray, span: tuple[int, int], allowed: npt.NDArray[np.bool_], insert: float
+) -> tuple[FloatArray, npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """Cost (width, width), type and frame of the best landmark to insert strictly inside ``span``
+    between a landmark of type a (row) and one of type b (column), for a → σ → b allowed: the
+    frame closest to σ's tutor mean, at ``insert`` plus its pose cost."""
+    width = allowed.shape[0]
+    cost = np.full((width, width), np.inf)
+    kind = np.full((width, width), -1, dtype=np.int64)
+    where = np.full((width, width), -1, dtype=np.int64)
+    inside = distances[span[0] + 1 : span[1]]
+    if inside.shape[0] == 0:
+        return cost, kind, where
+    at = np.argmin(inside, axis=0)
+    price = insert + pose_costs(inside)[at, np.arange(width)]
+    for sigma in range(width):
+        c = np.where(allowed[:, sigma][:, None] & allowed[sigma][None, :], price[sigma], np.inf)
+        better = c < cost
+        cost[better], kind[better], where[better] = c[better], sigma, span[0] + 1 + at[sigma]
+    return cost, kind, where
+
+
+@dataclass
+class _Lattice:
+    """Dynamic-programming state of `regularise`: best[k, t] is the least cost of a sequence whose
+    last kept landmark is k with type t; back[k, t] = (previous landmark, its type, inserted
+    type, inserted frame), −1 where none."""
+
+    frames: IntArray
+    cost: FloatArray  # (n, width) cost of keeping landmark k as type t
+    distances: FloatArray  # (F, width) from `pose_distances`
+    allowed: npt.NDArray[np.bool_]
+    options: GrammarOptions
+    best: FloatArray
+    back: npt.NDArray[np.int64]
+
+
+def _relax(lat: _Lattice, j: int, k: int) -> None:
+    """Improve best[k] through landmark j kept before k (those between dropped)."""
+    width = lat.allowed.shape[0]
+    direct = np.where(lat.allowed, 0.0, np.inf)
+    span = (int(lat.frames[j]), int(lat.frames[k]))
+    via, kind, where = _bridges(lat.distances, span, lat.allowed, lat.options.insert)
+    total = lat.best[j][:, None] + np.minimum(direct, via) + lat.options.delete * (k - j - 1)
+    src, cols = np.argmin(total, axis=0), np.arange(width)
+    value = total[src, cols] + lat.cost[k]
+    better = value < lat.best[k]
+    bridged = via[src, cols] < direct[src, cols]
+    record = np.column_stack(
+        [
+            np.full(width, j),
+            src,
+            np.where(bridged, kind[src, cols], -1),
+            np.where(bridged, where[src, cols], -1),
+        ]
+    )
+    lat.best[k, better], lat.back[k, better] = value[better], record[better]
+
+
+def regularise(
+    landmarks: Candidates,
+    signature: FloatArray,
+    means: dict[int, FloatArray],
+    allowed: npt.NDArray[np.bool_],
+    options: GrammarOptions = GrammarOptions(),
+) -> Candidates:
+    """Keep, (re)type and complete refined landmarks so consecutive types follow ``allowed``.
+
+    Minimises, by dynamic programming over (landmark, type): Σ pose cost (`pose_costs`) +
+    retype · [type changed] over kept landmarks, + delete · dropped landmarks, + (insert + pose
+    cost) per landmark inserted between two kept ones where the grammar needs one (at the frame
+    closest to that type's tutor mean). A repetition's end of range detected as a start becomes an
+    end of range again, and a missed one is put back, instead of a start being dropped.
+    """
+    n, width = landmarks.frames.size, allowed.shape[0]
+    if n == 0:
+        return landmarks
+    distances = pose_distances(signature, means, width)
+    retyped = np.arange(width)[None, :] != landmarks.types[:, None]
+    cost = pose_costs(distances[landmarks.frames]) + options.retype * retyped
+    best = cost + options.delete * np.arange(n)[:, None]  # k as the first kept landmark
+    back = np.full((n, width, 4), -1, dtype=np.int64)
+    lat = _Lattice(landmarks.frames, cost, distances, allowed, options, best, back)
+    for k in range(1, n):
+        for j in range(max(0, k - options.lookback - 1), k):
+            _relax(lat, j, k)
+    return _regularised(landmarks, best + options.delete * (n - 1 - np.arange(n))[:, None], back)
+
+
+def _regularised(
+    landmarks: Candidates, total: FloatArray, back: npt.NDArray[np.int64]
+) -> Candidates:
+    k, t = (int(v) for v in np.unravel_index(int(np.argmin(total)), total.shape))
+    out: list[tuple[int, int]] = []
+    while k >= 0:
+        out.append((int(landmarks.frames[k]), t))
+        j, src, kind, frame = (int(v) for v in back[k, t])
+        if kind >= 0:
+            out.append((frame, kind))
+        k, t = j, src
+    out.sort()
+    return Candidates(
+        np.array([f for f, _ in out], dtype=np.int64), np.array([t for _, t in out], dtype=np.int64)
+    )

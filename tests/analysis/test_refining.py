@@ -1,0 +1,185 @@
+"""Landmark refining (thesis 004, 5.5, eqs 5.27–5.33) and our grammar and relocation steps."""
+
+import numpy as np
+
+from analysis.refining import (
+    Candidates,
+    GrammarOptions,
+    RefineOptions,
+    cluster,
+    em_clusters,
+    farthest_frame,
+    farthest_types,
+    gap_clusters,
+    mean_poses,
+    refine,
+    regularise,
+    relocate,
+    select,
+    temporal_clusters,
+    transitions,
+)
+
+
+def cands(frames, types):
+    return Candidates(np.asarray(frames, dtype=np.int64), np.asarray(types, dtype=np.int64))
+
+
+def test_temporal_clusters_eq_5_29_by_hand():
+    # gaps 1, 1, 18, 1, 29: ratios (from the third landmark) 1, 18, 1/18, 29 against β = 2
+    assert temporal_clusters([10, 11, 12, 30, 31, 60], 2.0).tolist() == [1, 1, 1, 2, 2, 3]
+
+
+def test_temporal_clusters_keep_the_first_two_together_and_need_a_ratio():
+    # χ_1 and χ_2 always share a cluster; evenly spaced landmarks never start a new one.
+    assert temporal_clusters([0, 50], 2.0).tolist() == [1, 1]
+    assert temporal_clusters([0, 30, 60, 90], 2.0).tolist() == [1, 1, 1, 1]
+
+
+def test_gap_clusters_split_at_gaps_larger_than_beta():
+    assert gap_clusters([10, 11, 12, 30, 31, 60], 5.0).tolist() == [1, 1, 1, 2, 2, 3]
+    assert gap_clusters([0, 5], 5.0).tolist() == [1, 1]
+
+
+def test_mean_poses_eq_5_30():
+    sig = np.array([[0.0, 1.0], [1.0, 1.0], [2.0, 3.0], [3.0, 5.0]])
+    means = mean_poses(sig, [0, 2, 3], [1, 1, 2])
+    assert set(means) == {1, 2}
+    np.testing.assert_allclose(means[1], [1.0, 2.0])
+    np.testing.assert_allclose(means[2], [3.0, 5.0])
+
+
+MEANS = {1: np.array([1.0]), 2: np.array([2.0])}
+
+
+def test_mu1_takes_the_member_closest_to_its_own_types_tutor_mean():
+    sig = np.array([[1.0], [3.0], [0.0]])
+    c = cands([0, 1, 2], [1, 2, 2])
+    out = select(c, np.zeros(3, dtype=np.int64), sig, MEANS, "mu1")  # eq 5.31
+    assert (out.frames.tolist(), out.types.tolist()) == ([0], [1])
+
+
+def test_mu2_takes_the_majority_type_first():
+    sig = np.array([[1.0], [3.0], [0.0]])
+    c = cands([0, 1, 2], [1, 2, 2])
+    out = select(c, np.zeros(3, dtype=np.int64), sig, MEANS, "mu2")  # eqs 5.32–5.33
+    assert (out.frames.tolist(), out.types.tolist()) == ([1], [2])
+
+
+def test_selection_is_per_cluster_and_sorted_by_frame():
+    sig = np.array([[2.1], [1.9], [5.0], [1.0], [0.7]])
+    c = cands([0, 1, 2, 3, 4], [2, 2, 2, 1, 1])
+    out = select(c, np.array([1, 1, 1, 0, 0]), sig, MEANS, "mu1")
+    assert (out.frames.tolist(), out.types.tolist()) == ([0, 3], [2, 1])
+
+
+def test_extreme_selection_goes_farthest_along_the_type_axis():
+    sig = np.array([[1.8], [2.6], [2.1]])  # the tutor's end of range is 2, this patient goes 2.6
+    out = select(cands([0, 1, 2], [2, 2, 2]), np.zeros(3, dtype=np.int64), sig, MEANS, "extreme")
+    assert out.frames.tolist() == [1]
+
+
+def _bursts():
+    frames = np.r_[10:20, 60:70]
+    sig = np.zeros((80, 1))
+    sig[frames, 0] = np.r_[np.linspace(0.5, 1.4, 10), np.linspace(1.5, 2.4, 10)]
+    sig[[14, 64], 0] = [1.0, 2.0]  # the members closest to the tutor's means
+    return cands(frames, [1] * 10 + [2] * 10), sig
+
+
+def test_em_and_kmeans_find_the_two_bursts():
+    c, sig = _bursts()
+    for method in ("em", "kmeans", "gap"):
+        labels = cluster(c, sig, RefineOptions(clustering=method, n_clusters=2))
+        assert len(set(labels[:10].tolist())) == 1, method
+        assert len(set(labels[10:].tolist())) == 1, method
+        assert labels[0] != labels[10], method
+
+
+def test_refine_keeps_one_landmark_per_burst():
+    c, sig = _bursts()
+    out = refine(c, sig, MEANS, RefineOptions(clustering="em", selection="mu1", n_clusters=2))
+    assert (out.frames.tolist(), out.types.tolist()) == ([14, 64], [1, 2])
+
+
+def test_em_chooses_the_number_of_clusters_by_bic():
+    rng = np.random.default_rng(0)
+    points = np.vstack(
+        [rng.normal(0, 1, (40, 2)), rng.normal(20, 1, (40, 2)), rng.normal(40, 1, (40, 2))]
+    )
+    labels = em_clusters(points, [1, 2, 3, 4, 5], seed=0)
+    assert len(set(labels.tolist())) == 3
+    assert len(set(labels[:40].tolist())) == 1
+
+
+def test_kmeans_without_a_count_uses_the_gap_estimate():
+    c, sig = _bursts()
+    labels = cluster(c, sig, RefineOptions(clustering="kmeans"))
+    assert len(set(labels.tolist())) == 2
+
+
+def test_refine_of_nothing_is_nothing():
+    out = refine(cands([], []), np.zeros((5, 1)), MEANS)
+    assert out.frames.size == 0
+
+
+def test_transitions_from_training_sequences():
+    allowed = transitions([[1, 2, 1, 2, 1], [1, 3, 1]], 3)
+    pairs = {(int(a), int(b)) for a, b in np.argwhere(allowed)}
+    assert pairs == {(1, 2), (2, 1), (1, 3), (3, 1)}
+
+
+POSES = np.array([0.0, 1.0, 5.0, 3.0, 0.0, 2.0, 0.0])[:, None, None]  # (F, J=1, 1)
+
+
+def test_farthest_frame_between_two_landmarks():
+    assert farthest_frame(POSES, 0, 4) == 2
+    assert farthest_frame(POSES, 4, 6) == 5
+
+
+def test_farthest_types_are_learnt_from_training_samples():
+    # type 2 at frame 2 is the farthest pose from frame 0 before frame 4; type 3 at frame 4 is
+    # not the farthest from frame 2 before frame 6 (frame 3 would be... no: 4 is 5 away, 3 is 2)
+    # so make it a mid-way pose: type 3 at frame 3 between 2 and 6 (farthest is 4).
+    samples = [(POSES, np.array([0, 2, 3, 6]), np.array([1, 2, 3, 1]))]
+    assert farthest_types(samples, tolerance=0) == {2}
+    assert farthest_types(samples, tolerance=1) == {2, 3}
+
+
+def test_relocate_moves_only_the_given_types():
+    out = relocate(cands([0, 1, 4], [1, 2, 1]), POSES, {2})
+    assert out.frames.tolist() == [0, 2, 4]
+
+
+GRAMMAR = transitions([[1, 2, 1]], 2)
+FAR = {1: np.array([0.0]), 2: np.array([3.0])}
+
+
+def _ramp_signature():
+    sig = np.zeros((11, 1))
+    sig[3:8, 0] = [1.0, 2.0, 3.0, 2.0, 1.0]
+    return sig
+
+
+def test_grammar_retypes_an_end_of_range_seen_as_a_start():
+    out = regularise(cands([0, 5, 10], [1, 1, 1]), _ramp_signature(), FAR, GRAMMAR)
+    assert (out.frames.tolist(), out.types.tolist()) == ([0, 5, 10], [1, 2, 1])
+
+
+def test_grammar_puts_back_a_missed_end_of_range():
+    out = regularise(cands([0, 10], [1, 1]), _ramp_signature(), FAR, GRAMMAR)
+    assert (out.frames.tolist(), out.types.tolist()) == ([0, 5, 10], [1, 2, 1])
+
+
+def test_grammar_drops_a_duplicate_start_during_a_pause():
+    sig = np.zeros((11, 1))
+    sig[10] = 3.0
+    out = regularise(cands([0, 3, 10], [1, 1, 2]), sig, FAR, GRAMMAR, GrammarOptions())
+    assert (out.types.tolist(), out.frames.tolist()[-1]) == ([1, 2], 10)
+    assert out.frames.size == 2
+
+
+def test_grammar_keeps_a_valid_sequence_unchanged():
+    c = cands([0, 5, 10], [1, 2, 1])
+    out = regularise(c, _ramp_signature(), FAR, GRAMMAR)
+    assert (out.frames.tolist(), out.types.tolist()) == ([0, 5, 10], [1, 2, 1])

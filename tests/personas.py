@@ -1,0 +1,96 @@
+"""People the web tests act as: a therapist, a colleague in the same clinic, an outsider from
+another clinic, the patient, another patient of the same clinic, and anonymous."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from webapp.accounts.models import Clinic, Role, User
+from webapp.patients.models import Patient
+
+PASSWORD = "a-long-test-password-42"
+
+
+@dataclass(frozen=True)
+class World:
+    clinic: Clinic
+    other_clinic: Clinic
+    therapist: User
+    colleague: User
+    outsider: User
+    patient_user: User
+    other_patient_user: User
+    patient: Patient
+    other_patient: Patient
+    outsider_patient: Patient
+
+
+def make_user(username: str, clinic: Clinic, role: str) -> User:
+    user = User(username=username, clinic=clinic, role=role)
+    user.set_password(PASSWORD)
+    user.save()
+    return user
+
+
+def make_world() -> World:
+    clinic = Clinic.objects.create(name="North clinic")
+    other = Clinic.objects.create(name="South clinic")
+    therapist = make_user("therapist", clinic, Role.THERAPIST)
+    colleague = make_user("colleague", clinic, Role.THERAPIST)
+    outsider = make_user("outsider", other, Role.THERAPIST)
+    patient_user = make_user("patient", clinic, Role.PATIENT)
+    other_patient_user = make_user("other-patient", clinic, Role.PATIENT)
+    patient = Patient.objects.create(clinic=clinic, user=patient_user, display_name="Ann Example")
+    patient.therapists.add(therapist)
+    other_patient = Patient.objects.create(
+        clinic=clinic, user=other_patient_user, display_name="Bob Example"
+    )
+    outsider_patient = Patient.objects.create(clinic=other, display_name="Cy Elsewhere")
+    return World(
+        clinic,
+        other,
+        therapist,
+        colleague,
+        outsider,
+        patient_user,
+        other_patient_user,
+        patient,
+        other_patient,
+        outsider_patient,
+    )
+
+
+FIXTURES = Path(__file__).resolve().parents[1] / "data" / "ui-prmd"
+
+
+def fixture_bytes(relative: str) -> bytes:
+    return (FIXTURES / relative).read_bytes()
+
+
+def make_exercise(clinic: Clinic, name: str = "Deep squat", source: str = "reps/m01_s01_e01.bvh.gz"):
+    from django.core.files.base import ContentFile
+
+    from webapp.exercises.models import Exercise
+
+    exercise = Exercise(
+        clinic=clinic, name=name, tutor_landmark_frames=[0, 41, 72],
+        tutor_landmark_types=[1, 2, 1], landmark_type_names={"1": "start", "2": "end of range"},
+    )
+    exercise.tutor_file.save("tutor.bvh.gz", ContentFile(fixture_bytes(source)), save=False)
+    exercise.save()
+    return exercise
+
+
+def make_recording(patient: Patient, exercise, source: str = "reps/m01_s01_e02.bvh.gz"):
+    from django.core.files.base import ContentFile
+
+    from webapp.recordings.models import AnalysisRun, Recording
+
+    recording = Recording(
+        clinic=patient.clinic, patient=patient, exercise=exercise, checksum=source
+    )
+    recording.file.save("rec.bvh.gz", ContentFile(fixture_bytes(source)), save=False)
+    recording.save()
+    AnalysisRun.objects.create(recording=recording)
+    return recording

@@ -1,0 +1,109 @@
+"""Uploading recordings through the page and the API: good files are stored and analysed once
+committed; bad ones answer 400 with the reason and leave nothing behind."""
+
+from __future__ import annotations
+
+import gzip
+
+import pytest
+from django.core.files.uploadedfile import SimpleUploadedFile
+from django.urls import reverse
+
+from tests.personas import fixture_bytes, make_exercise
+from webapp.recordings.models import AnalysisRun, Recording
+
+GOOD = "reps/m01_s01_e02.bvh.gz"
+
+
+@pytest.fixture
+def exercise(world):
+    return make_exercise(world.clinic)
+
+
+def upload(client, patient, exercise, content: bytes, name: str = "take.bvh.gz", **extra):
+    data = {"patient": str(patient.pk), "exercise": str(exercise.pk) if exercise else ""}
+    data.update(extra)
+    data["file"] = SimpleUploadedFile(name, content)
+    return client.post(reverse("recordings:upload"), data)
+
+
+def assert_nothing_stored(settings):
+    assert Recording.objects.count() == 0
+    assert AnalysisRun.objects.count() == 0
+    media = settings.MEDIA_ROOT / "recordings"
+    assert not media.exists() or not any(p.is_file() for p in media.rglob("*"))
+
+
+def test_good_upload_is_stored_with_checksum_and_queued(client, world, exercise, monkeypatch):
+    enqueued = []
+    monkeypatch.setattr("workers.tasks.analyse_recording.delay", enqueued.append)
+    client.force_login(world.therapist)
+    response = upload(client, world.patient, exercise, fixture_bytes(GOOD), pain_score="3")
+    assert response.status_code == 302
+    recording = Recording.objects.get()
+    assert recording.n_frames > 10 and recording.fps == pytest.approx(30.0, rel=1e-3)
+    assert len(recording.checksum) == 64
+    assert recording.pain_score == 3
+    run = AnalysisRun.objects.get()
+    assert run.status == "queued"
+    assert enqueued == [], "enqueued before the commit"
+
+
+def test_patient_uploads_for_themselves(client, world, exercise, monkeypatch):
+    monkeypatch.setattr("workers.tasks.analyse_recording.delay", lambda run_id: None)
+    client.force_login(world.patient_user)
+    response = upload(client, world.patient, exercise, fixture_bytes(GOOD))
+    assert response.status_code == 302
+    assert Recording.objects.get().uploaded_by == world.patient_user
+
+
+def test_patient_cannot_upload_for_another_patient(client, world, exercise, settings):
+    client.force_login(world.patient_user)
+    response = upload(client, world.other_patient, exercise, fixture_bytes(GOOD))
+    assert response.status_code == 400
+    assert_nothing_stored(settings)
+
+
+@pytest.mark.parametrize(
+    ("content", "name", "reason"),
+    [
+        (b"HIERARCHY\nROOT Hips\n{\n", "broken.bvh", "not a readable BVH"),
+        (b"%PDF-1.4 not motion at all", "scan.pdf", "Upload a BVH"),
+        (b"\x00\x01\x02garbage", "take.bvh", "not a readable BVH"),
+        (gzip.compress(b"MOTION\nFrames: 1\n"), "take.bvh.gz", "not a readable BVH"),
+    ],
+)
+def test_bad_files_answer_400_and_store_nothing(client, world, exercise, settings, content, name, reason):
+    client.force_login(world.therapist)
+    response = upload(client, world.patient, exercise, content, name=name)
+    assert response.status_code == 400
+    assert reason in response.content.decode()
+    assert_nothing_stored(settings)
+
+
+def test_oversize_file_is_refused(client, world, exercise, settings):
+    settings.MAX_UPLOAD_BYTES = 1000
+    client.force_login(world.therapist)
+    response = upload(client, world.patient, exercise, fixture_bytes(GOOD))
+    assert response.status_code == 400
+    assert "largest accepted" in response.content.decode()
+    assert_nothing_stored(settings)
+
+
+def test_skeleton_mismatch_is_refused(client, world, exercise, settings):
+    text = gzip.decompress(fixture_bytes(GOOD)).decode().replace("LeftFoot", "LeftPaw")
+    client.force_login(world.therapist)
+    response = upload(client, world.patient, exercise, text.encode(), name="take.bvh")
+    assert response.status_code == 400
+    assert "skeleton does not match" in response.content.decode()
+    assert_nothing_stored(settings)
+
+
+def test_duplicate_upload_is_detected(client, world, exercise, monkeypatch):
+    monkeypatch.setattr("workers.tasks.analyse_recording.delay", lambda run_id: None)
+    client.force_login(world.therapist)
+    assert upload(client, world.patient, exercise, fixture_bytes(GOOD)).status_code == 302
+    response = upload(client, world.patient, exercise, fixture_bytes(GOOD))
+    assert response.status_code == 400
+    assert "already uploaded" in response.content.decode()
+    assert Recording.objects.count() == 1

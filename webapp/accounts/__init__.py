@@ -1,0 +1,1 @@
+"""Clinics, users and their roles."""

@@ -1,0 +1,30 @@
+from django.urls import path
+from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerView
+from rest_framework.authtoken.views import obtain_auth_token
+from rest_framework.permissions import IsAuthenticated
+
+from webapp.api import views
+
+urlpatterns = [
+    path("v1/auth/token/", obtain_auth_token, name="api-token"),
+    path("v1/patients/", views.PatientList.as_view(), name="api-patients"),
+    path("v1/patients/<uuid:pk>/", views.PatientDetail.as_view(), name="api-patient"),
+    path(
+        "v1/patients/<uuid:pk>/recordings/",
+        views.PatientRecordings.as_view(),
+        name="api-patient-recordings",
+    ),
+    path(
+        "v1/patients/<uuid:pk>/progress/", views.PatientProgress.as_view(), name="api-patient-progress"
+    ),
+    path("v1/exercises/", views.ExerciseList.as_view(), name="api-exercises"),
+    path("v1/recordings/", views.RecordingCreate.as_view(), name="api-recordings"),
+    path("v1/recordings/<uuid:pk>/", views.RecordingDetail.as_view(), name="api-recording"),
+    # The schema describes clinical endpoints: only signed-in users and token holders read it.
+    path(
+        "schema/",
+        SpectacularAPIView.as_view(permission_classes=[IsAuthenticated]),
+        name="api-schema",
+    ),
+    path("docs/", SpectacularSwaggerView.as_view(url_name="api-schema"), name="api-docs"),
+]

@@ -1,0 +1,1 @@
+"""Append-only log of every read and write of patient data."""

@@ -1,0 +1,1 @@
+"""The therapist's home page, health check and the demo clinic loader."""

@@ -1,0 +1,101 @@
+"""The demo clinic: a therapist, a patient and three exercises with UI-PRMD tutors.
+
+Idempotent: loading twice keeps existing rows and never duplicates them.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+
+from django.conf import settings
+from django.core.files.base import ContentFile
+from django.db import transaction
+
+from webapp.accounts.models import Clinic, Role, User
+from webapp.exercises.models import Exercise
+from webapp.patients.models import Patient
+
+DEMO_CLINIC = "Demo clinic"
+UI_PRMD = Path(settings.BASE_DIR) / "data" / "ui-prmd"
+LANDMARK_TYPE_NAMES = {"1": "start", "2": "end of range"}
+
+
+@dataclass(frozen=True)
+class DemoExercise:
+    code: str
+    name: str
+    description: str
+
+
+DEMO_EXERCISES = (
+    DemoExercise("m01", "Deep squat", "Overhead deep squat holding a dowel; heels stay down."),
+    DemoExercise("m05", "Sit to stand", "Stand up from a chair and sit down again, arms crossed."),
+    DemoExercise(
+        "m07", "Shoulder abduction", "Raise the arm sideways to shoulder height and lower it."
+    ),
+)
+
+
+def tutor_landmarks(relative_file: str) -> tuple[list[int], list[int]]:
+    """Key-pose frames and types of a UI-PRMD file from ``landmarks.csv``."""
+    with open(UI_PRMD / "landmarks.csv", newline="") as handle:
+        for row in csv.DictReader(handle):
+            if row["file"] == relative_file:
+                frames = [int(v) for v in row["frames"].split(";")]
+                types = [int(v) for v in row["types"].split(";")]
+                return frames, types
+    raise LookupError(f"no landmarks for {relative_file}")
+
+
+def ensure_user(username: str, password: str, clinic: Clinic, role: str, name: str) -> User:
+    user, created = User.objects.get_or_create(
+        username=username, defaults={"clinic": clinic, "role": role}
+    )
+    if created:
+        first, _, last = name.partition(" ")
+        user.first_name, user.last_name = first, last
+        user.set_password(password)
+        user.save()
+    return user
+
+
+def ensure_exercise(clinic: Clinic, spec: DemoExercise) -> Exercise:
+    existing = Exercise.objects.filter(clinic=clinic, name=spec.name).first()
+    if existing is not None:
+        return existing
+    relative = f"sessions/{spec.code}_s01_correct.bvh.gz"
+    content = (UI_PRMD / relative).read_bytes()
+    frames, types = tutor_landmarks(relative)
+    exercise = Exercise(
+        clinic=clinic,
+        name=spec.name,
+        description=spec.description,
+        tutor_checksum=hashlib.sha256(content).hexdigest(),
+        tutor_landmark_frames=frames,
+        tutor_landmark_types=types,
+        landmark_type_names=LANDMARK_TYPE_NAMES,
+    )
+    exercise.tutor_file.save(f"{spec.code}_tutor.bvh.gz", ContentFile(content), save=False)
+    exercise.save()
+    return exercise
+
+
+@transaction.atomic
+def load_demo_clinic() -> Clinic:
+    clinic, _ = Clinic.objects.get_or_create(name=DEMO_CLINIC)
+    therapist = ensure_user(
+        "demo-therapist", "demo-therapist-pw", clinic, Role.THERAPIST, "Dana Therapist"
+    )
+    patient_user = ensure_user(
+        "demo-patient", "demo-patient-pw", clinic, Role.PATIENT, "Pat Patient"
+    )
+    patient, _ = Patient.objects.get_or_create(
+        clinic=clinic, user=patient_user, defaults={"display_name": "Pat Patient"}
+    )
+    patient.therapists.add(therapist)
+    for spec in DEMO_EXERCISES:
+        ensure_exercise(clinic, spec)
+    return clinic

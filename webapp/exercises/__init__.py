@@ -1,0 +1,1 @@
+"""Exercises, their tutor recordings and their versioned models."""

@@ -1,0 +1,97 @@
+from __future__ import annotations
+
+from django import forms
+from django.core.exceptions import ValidationError
+
+from webapp.exercises.models import Exercise
+from webapp.recordings.uploads import ParsedUpload, parse_upload
+
+
+def parse_int_list(text: str, field: str) -> list[int]:
+    try:
+        return [int(part) for part in text.replace(",", ";").split(";") if part.strip()]
+    except ValueError as error:
+        raise ValidationError(f"{field}: use whole numbers separated by ';'.") from error
+
+
+class ExerciseForm(forms.ModelForm):
+    """Create an exercise from its tutor recording (the reference performance)."""
+
+    tutor = forms.FileField(help_text="The reference performance as BVH (.bvh or .bvh.gz).")
+    landmark_frames = forms.CharField(
+        required=False, help_text="Key-pose frames, e.g. 0;41;72. You can mark them later."
+    )
+    landmark_types = forms.CharField(
+        required=False, help_text="Key-pose type of each frame, e.g. 1;2;1."
+    )
+
+    class Meta:
+        model = Exercise
+        fields = ["name", "description"]
+
+    def __init__(self, *args, clinic, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.clinic = clinic
+        self.parsed: ParsedUpload | None = None
+
+    def clean_name(self):
+        name = self.cleaned_data["name"].strip()
+        if Exercise.objects.filter(clinic=self.clinic, name__iexact=name).exists():
+            raise ValidationError("Your clinic already has an exercise with this name.")
+        return name
+
+    def clean_tutor(self):
+        upload = self.cleaned_data["tutor"]
+        self.parsed = parse_upload(upload)
+        return upload
+
+    def clean(self):
+        cleaned = super().clean()
+        frames = parse_int_list(cleaned.get("landmark_frames", ""), "Key-pose frames")
+        types = parse_int_list(cleaned.get("landmark_types", ""), "Key-pose types")
+        validate_landmarks(frames, types, self.parsed)
+        cleaned["frames_list"], cleaned["types_list"] = frames, types
+        return cleaned
+
+
+def validate_landmarks(frames: list[int], types: list[int], parsed: ParsedUpload | None) -> None:
+    if len(frames) != len(types):
+        raise ValidationError("Give one key-pose type for every key-pose frame.")
+    if frames != sorted(frames):
+        raise ValidationError("Key-pose frames must be in time order.")
+    if parsed is not None and frames and (frames[0] < 0 or frames[-1] >= parsed.motion.frames.shape[0]):
+        raise ValidationError(
+            f"Key-pose frames must lie between 0 and {parsed.motion.frames.shape[0] - 1}."
+        )
+    if any(t < 1 for t in types):
+        raise ValidationError("Key-pose types are numbered from 1.")
+
+
+class LandmarksForm(forms.Form):
+    """Edit the tutor's key poses (the annotation page posts this)."""
+
+    frames = forms.CharField(required=False)
+    types = forms.CharField(required=False)
+    type_names = forms.JSONField(required=False)
+    involved_joints = forms.JSONField(required=False)
+
+    def __init__(self, *args, n_frames: int, joint_names: tuple[str, ...], **kwargs):
+        super().__init__(*args, **kwargs)
+        self.n_frames = n_frames
+        self.joint_names = joint_names
+
+    def clean(self):
+        cleaned = super().clean()
+        frames = parse_int_list(cleaned.get("frames") or "", "Key-pose frames")
+        types = parse_int_list(cleaned.get("types") or "", "Key-pose types")
+        if frames and (frames[0] < 0 or max(frames) >= self.n_frames):
+            raise ValidationError(f"Key-pose frames must lie between 0 and {self.n_frames - 1}.")
+        order = sorted(range(len(frames)), key=frames.__getitem__)
+        cleaned["frames_list"] = [frames[i] for i in order]
+        cleaned["types_list"] = [types[i] for i in order] if len(types) == len(frames) else types
+        validate_landmarks(cleaned["frames_list"], cleaned["types_list"], None)
+        joints = cleaned.get("involved_joints") or []
+        unknown = sorted(set(joints) - set(self.joint_names))
+        if unknown:
+            raise ValidationError(f"Unknown joints: {', '.join(unknown)}.")
+        return cleaned

@@ -1,0 +1,74 @@
+"""An exercise is defined by its tutor (reference) recording and its key poses."""
+
+from __future__ import annotations
+
+import uuid
+
+from django.db import models
+
+from webapp.accounts.models import Clinic
+
+
+class Exercise(models.Model):
+    id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
+    clinic = models.ForeignKey(Clinic, on_delete=models.PROTECT, related_name="exercises")
+    name = models.CharField(max_length=200)
+    description = models.TextField(blank=True)
+    tutor_file = models.FileField(upload_to="tutors/")
+    tutor_checksum = models.CharField(max_length=64, blank=True)
+    # Key poses of the tutor: frame numbers and landmark type ids, in time order.
+    tutor_landmark_frames = models.JSONField(default=list, blank=True)
+    tutor_landmark_types = models.JSONField(default=list, blank=True)
+    # {"1": "start", "2": "end of range"}: names shown to therapists and used in feedback.
+    landmark_type_names = models.JSONField(default=dict, blank=True)
+    involved_joints = models.JSONField(default=list, blank=True)
+    feedback_grammar = models.TextField(blank=True)
+    active_model = models.ForeignKey(
+        "exercises.ExerciseModel",
+        on_delete=models.SET_NULL,
+        null=True,
+        blank=True,
+        related_name="+",
+    )
+    created_at = models.DateTimeField(auto_now_add=True)
+    archived_at = models.DateTimeField(null=True, blank=True)
+
+    class Meta:
+        ordering = ["name"]
+        constraints = [
+            models.UniqueConstraint(fields=["clinic", "name"], name="exercise_name_per_clinic")
+        ]
+
+    def __str__(self) -> str:
+        return self.name
+
+
+class ModelStatus(models.TextChoices):
+    QUEUED = "queued", "Queued"
+    RUNNING = "running", "Building"
+    READY = "ready", "Ready"
+    FAILED = "failed", "Failed"
+
+
+class ExerciseModel(models.Model):
+    """One built version of an exercise's model; the exercise names its active version."""
+
+    id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
+    exercise = models.ForeignKey(Exercise, on_delete=models.CASCADE, related_name="models")
+    version = models.PositiveIntegerField()
+    status = models.CharField(
+        max_length=10, choices=ModelStatus.choices, default=ModelStatus.QUEUED
+    )
+    progress = models.PositiveSmallIntegerField(default=0)
+    artefact = models.FileField(upload_to="models/", blank=True)
+    training_report = models.JSONField(default=dict, blank=True)
+    code_version = models.CharField(max_length=40, blank=True)
+    error = models.TextField(blank=True)
+    created_at = models.DateTimeField(auto_now_add=True)
+    finished_at = models.DateTimeField(null=True, blank=True)
+
+    class Meta:
+        ordering = ["-version"]
+        constraints = [
+            models.UniqueConstraint(fields=["exercise", "version"], name="one_model_version")
+        ]

@@ -1,0 +1,1 @@
+"""Patients, their prescriptions and performance levels."""

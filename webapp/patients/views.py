@@ -1,0 +1,96 @@
+from __future__ import annotations
+
+from django.contrib import messages
+from django.contrib.auth.decorators import login_required
+from django.core.paginator import Paginator
+from django.db.models import Q
+from django.http import HttpRequest, HttpResponse
+from django.shortcuts import redirect, render
+from django.utils import timezone
+from django.views.decorators.http import require_POST
+
+from webapp.accounts.permissions import get_patient_for_user, require_staff, visible_patients
+from webapp.patients.forms import PatientForm, PrescriptionForm
+from webapp.patients.models import Patient
+
+PAGE_SIZE = 25
+
+
+@login_required
+@require_staff
+def patient_list(request: HttpRequest) -> HttpResponse:
+    query = request.GET.get("q", "").strip()
+    show_archived = request.GET.get("archived") == "1"
+    patients = visible_patients(request.user).filter(archived_at__isnull=not show_archived)
+    if query:
+        patients = patients.filter(Q(display_name__icontains=query) | Q(notes__icontains=query))
+    patients = patients.order_by("display_name")
+    page = Paginator(patients, PAGE_SIZE).get_page(request.GET.get("page"))
+    context = {"page": page, "query": query, "show_archived": show_archived}
+    return render(request, "patients/list.html", context)
+
+
+@login_required
+def patient_detail(request: HttpRequest, pk) -> HttpResponse:
+    patient = get_patient_for_user(request, pk)
+    context = {
+        "patient": patient,
+        "prescriptions": patient.prescriptions.select_related("exercise"),
+        "recordings": patient.recordings.select_related("exercise").prefetch_related("runs")[:50],
+        "levels": patient.levels.select_related("exercise").order_by("exercise__name", "joint"),
+    }
+    return render(request, "patients/detail.html", context)
+
+
+@login_required
+@require_staff
+def patient_create(request: HttpRequest) -> HttpResponse:
+    form = PatientForm(request.POST or None)
+    if request.method == "POST" and form.is_valid():
+        patient: Patient = form.save(commit=False)
+        patient.clinic = request.user.clinic
+        patient.save()
+        patient.therapists.add(request.user)
+        messages.success(request, f"Patient {patient.display_name} created.")
+        return redirect("patients:detail", pk=patient.pk)
+    return render(request, "patients/form.html", {"form": form, "title": "New patient"})
+
+
+@login_required
+@require_staff
+def patient_edit(request: HttpRequest, pk) -> HttpResponse:
+    patient = get_patient_for_user(request, pk)
+    form = PatientForm(request.POST or None, instance=patient)
+    if request.method == "POST" and form.is_valid():
+        form.save()
+        messages.success(request, "Changes saved.")
+        return redirect("patients:detail", pk=patient.pk)
+    context = {"form": form, "title": f"Edit {patient.display_name}", "patient": patient}
+    return render(request, "patients/form.html", context)
+
+
+@login_required
+@require_staff
+@require_POST
+def patient_archive(request: HttpRequest, pk) -> HttpResponse:
+    patient = get_patient_for_user(request, pk)
+    patient.archived_at = None if patient.archived_at else timezone.now()
+    patient.save(update_fields=["archived_at"])
+    state = "archived" if patient.archived_at else "restored"
+    messages.success(request, f"Patient {patient.display_name} {state}.")
+    return redirect("patients:detail", pk=patient.pk)
+
+
+@login_required
+@require_staff
+def prescription_create(request: HttpRequest, pk) -> HttpResponse:
+    patient = get_patient_for_user(request, pk)
+    form = PrescriptionForm(request.POST or None, clinic=request.user.clinic)
+    if request.method == "POST" and form.is_valid():
+        prescription = form.save(commit=False)
+        prescription.patient = patient
+        prescription.save()
+        messages.success(request, "Prescription added.")
+        return redirect("patients:detail", pk=patient.pk)
+    context = {"form": form, "title": f"Prescribe for {patient.display_name}", "patient": patient}
+    return render(request, "patients/form.html", context)

@@ -1,0 +1,1 @@
+"""Uploaded recordings and their analysis runs."""

@@ -1,0 +1,48 @@
+from __future__ import annotations
+
+from django import forms
+from django.core.exceptions import ValidationError
+
+from webapp.exercises.models import Exercise
+from webapp.patients.models import Patient
+from webapp.recordings.uploads import ParsedUpload, check_not_duplicate, check_skeleton, parse_upload
+
+
+class UploadForm(forms.Form):
+    """Upload one recording. Validation parses the file, so a saved form is a usable recording."""
+
+    patient = forms.ModelChoiceField(queryset=Patient.objects.none())
+    exercise = forms.ModelChoiceField(
+        queryset=Exercise.objects.none(),
+        required=False,
+        help_text="Leave empty to let the system recognise the exercise.",
+    )
+    file = forms.FileField(help_text="A BVH recording (.bvh or .bvh.gz).")
+    pain_score = forms.IntegerField(
+        min_value=0, max_value=10, required=False, label="Pain (0 = none, 10 = worst)"
+    )
+    note = forms.CharField(widget=forms.Textarea(attrs={"rows": 3}), required=False, max_length=2000)
+
+    def __init__(self, *args, patients, exercises, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.fields["patient"].queryset = patients
+        self.fields["exercise"].queryset = exercises
+        self.parsed: ParsedUpload | None = None
+
+    def clean_file(self):
+        upload = self.cleaned_data["file"]
+        self.parsed = parse_upload(upload)
+        return upload
+
+    def clean(self):
+        cleaned = super().clean()
+        patient, exercise = cleaned.get("patient"), cleaned.get("exercise")
+        if self.parsed is None or patient is None:
+            return cleaned
+        try:
+            check_not_duplicate(patient, self.parsed.checksum)
+            if exercise is not None:
+                check_skeleton(self.parsed.motion, exercise)
+        except ValidationError as error:
+            self.add_error("file", error)
+        return cleaned

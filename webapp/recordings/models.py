@@ -1,0 +1,112 @@
+"""Recordings and analysis runs.
+
+Run status transitions: QUEUED → RUNNING (claimed by one worker with a conditional UPDATE)
+→ SUCCEEDED | FAILED. A run stuck in RUNNING past its time limit is reaped by the beat task.
+Runs are immutable history: re-analysis makes a new run.
+"""
+
+from __future__ import annotations
+
+import uuid
+
+from django.conf import settings
+from django.db import models
+
+from webapp.accounts.models import Clinic
+
+
+class Recording(models.Model):
+    id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
+    clinic = models.ForeignKey(Clinic, on_delete=models.PROTECT, related_name="recordings")
+    patient = models.ForeignKey(
+        "patients.Patient", on_delete=models.CASCADE, related_name="recordings"
+    )
+    exercise = models.ForeignKey(
+        "exercises.Exercise",
+        on_delete=models.PROTECT,
+        null=True,
+        blank=True,
+        related_name="recordings",
+    )
+    file = models.FileField(upload_to="recordings/%Y/%m/")
+    original_name = models.CharField(max_length=255, blank=True)
+    checksum = models.CharField(max_length=64, db_index=True)
+    size_bytes = models.PositiveBigIntegerField(default=0)
+    n_frames = models.PositiveIntegerField(default=0)
+    n_joints = models.PositiveIntegerField(default=0)
+    fps = models.FloatField(default=0.0)
+    duration_s = models.FloatField(default=0.0)
+    pain_score = models.PositiveSmallIntegerField(null=True, blank=True)
+    note = models.TextField(blank=True)
+    uploaded_by = models.ForeignKey(
+        settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True, related_name="+"
+    )
+    uploaded_at = models.DateTimeField(auto_now_add=True, db_index=True)
+
+    class Meta:
+        ordering = ["-uploaded_at"]
+        indexes = [models.Index(fields=["patient", "exercise", "uploaded_at"])]
+
+
+class RunStatus(models.TextChoices):
+    QUEUED = "queued", "Queued"
+    RUNNING = "running", "Running"
+    SUCCEEDED = "succeeded", "Succeeded"
+    FAILED = "failed", "Failed"
+
+
+class AnalysisRun(models.Model):
+    id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
+    recording = models.ForeignKey(Recording, on_delete=models.CASCADE, related_name="runs")
+    model = models.ForeignKey(
+        "exercises.ExerciseModel", on_delete=models.SET_NULL, null=True, blank=True
+    )
+    code_version = models.CharField(max_length=40, blank=True)
+    status = models.CharField(
+        max_length=10, choices=RunStatus.choices, default=RunStatus.QUEUED, db_index=True
+    )
+    stage = models.CharField(max_length=60, blank=True)
+    progress = models.PositiveSmallIntegerField(default=0)
+    attempts = models.PositiveSmallIntegerField(default=0)
+    worker = models.CharField(max_length=200, blank=True)
+    # Who holds the run: a token per claim, so a worker that lost its lease cannot write results.
+    lease_token = models.CharField(max_length=64, blank=True)
+    heartbeat_at = models.DateTimeField(null=True, blank=True)
+    created_at = models.DateTimeField(auto_now_add=True)
+    started_at = models.DateTimeField(null=True, blank=True)
+    finished_at = models.DateTimeField(null=True, blank=True)
+    user_error = models.TextField(blank=True)
+    developer_error = models.TextField(blank=True)
+    summary = models.JSONField(default=dict, blank=True)
+    arrays = models.FileField(upload_to="runs/%Y/%m/", blank=True)
+
+    class Meta:
+        ordering = ["-created_at"]
+        indexes = [models.Index(fields=["recording", "-created_at"])]
+
+
+class LandmarkCorrection(models.Model):
+    """A therapist's corrected key poses for one run: training data for the next model."""
+
+    run = models.ForeignKey(AnalysisRun, on_delete=models.CASCADE, related_name="landmark_fixes")
+    frames = models.JSONField()
+    types = models.JSONField()
+    author = models.ForeignKey(settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True)
+    created_at = models.DateTimeField(auto_now_add=True)
+    used_in_model = models.ForeignKey(
+        "exercises.ExerciseModel", on_delete=models.SET_NULL, null=True, blank=True
+    )
+
+
+class AssessmentCorrection(models.Model):
+    """A therapist's corrected level for one joint at one key pose of a run."""
+
+    run = models.ForeignKey(AnalysisRun, on_delete=models.CASCADE, related_name="assessment_fixes")
+    frame = models.PositiveIntegerField()
+    joint = models.CharField(max_length=100)
+    level = models.PositiveSmallIntegerField()
+    author = models.ForeignKey(settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True)
+    created_at = models.DateTimeField(auto_now_add=True)
+    used_in_model = models.ForeignKey(
+        "exercises.ExerciseModel", on_delete=models.SET_NULL, null=True, blank=True
+    )

@@ -1,0 +1,109 @@
+"""Accepting an uploaded recording: size, parse, skeleton and duplicate checks, then storage.
+
+Nothing is stored unless every check passes, and the recording, its first analysis run and the
+file are written in one transaction; the analysis is enqueued only after the commit.
+"""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+from dataclasses import dataclass
+
+from django.conf import settings
+from django.core.exceptions import ValidationError
+from django.core.files.base import ContentFile
+from django.core.files.uploadedfile import UploadedFile
+from django.db import transaction
+from django.utils import timezone
+
+from analysis.bvh import BVHError, Motion, read
+from webapp.accounts.models import User
+from webapp.exercises.models import Exercise
+from webapp.patients.models import Patient
+from webapp.recordings import services
+from webapp.recordings.models import AnalysisRun, Recording
+
+MIN_FRAMES = 10
+ACCEPTED_SUFFIXES = (".bvh", ".bvh.gz")
+
+
+@dataclass(frozen=True)
+class ParsedUpload:
+    content: bytes
+    checksum: str
+    motion: Motion
+    original_name: str
+
+
+def read_upload(upload: UploadedFile) -> bytes:
+    limit = settings.MAX_UPLOAD_BYTES
+    if upload.size is not None and upload.size > limit:
+        raise ValidationError(
+            f"The file is {upload.size / 1e6:.1f} MB; the largest accepted is {limit / 1e6:.0f} MB."
+        )
+    return upload.read(limit + 1)
+
+
+def parse_upload(upload: UploadedFile) -> ParsedUpload:
+    """Check an uploaded file is a usable BVH recording; raise ValidationError saying why not."""
+    name = upload.name or "recording.bvh"
+    if not name.lower().endswith(ACCEPTED_SUFFIXES):
+        raise ValidationError("Upload a BVH motion-capture file (.bvh or .bvh.gz).")
+    content = read_upload(upload)
+    if len(content) > settings.MAX_UPLOAD_BYTES:
+        raise ValidationError("The file is larger than the upload limit.")
+    try:
+        motion = read(content)
+    except (BVHError, gzip.BadGzipFile, EOFError, UnicodeDecodeError) as error:
+        raise ValidationError(f"This is not a readable BVH file: {error}") from error
+    if motion.frames.shape[0] < MIN_FRAMES:
+        raise ValidationError(
+            f"The recording has {motion.frames.shape[0]} frames; at least {MIN_FRAMES} are needed."
+        )
+    return ParsedUpload(content, hashlib.sha256(content).hexdigest(), motion, name)
+
+
+def check_skeleton(motion: Motion, exercise: Exercise) -> None:
+    """The recording must carry the joints of the exercise's tutor (same rig)."""
+    with exercise.tutor_file.open("rb") as handle:
+        tutor = read(handle.read())
+    missing = sorted(set(tutor.skeleton.names) - set(motion.skeleton.names))
+    if missing:
+        shown = ", ".join(missing[:5]) + (" …" if len(missing) > 5 else "")
+        raise ValidationError(
+            f"The recording's skeleton does not match the exercise's: missing joints {shown}."
+        )
+
+
+def check_not_duplicate(patient: Patient, checksum: str) -> None:
+    earlier = Recording.objects.filter(patient=patient, checksum=checksum).first()
+    if earlier is not None:
+        when = timezone.localtime(earlier.uploaded_at).strftime("%d %b %Y %H:%M")
+        raise ValidationError(f"This file was already uploaded for this patient on {when}.")
+
+
+@transaction.atomic
+def store_recording(
+    parsed: ParsedUpload,
+    *,
+    patient: Patient,
+    exercise: Exercise | None,
+    user: User,
+    pain_score: int | None = None,
+    note: str = "",
+) -> tuple[Recording, AnalysisRun | None]:
+    motion = parsed.motion
+    recording = Recording(
+        clinic=patient.clinic, patient=patient, exercise=exercise, checksum=parsed.checksum,
+        original_name=parsed.original_name[:255], size_bytes=len(parsed.content),
+        n_frames=motion.frames.shape[0], n_joints=len(motion.skeleton.names),
+        fps=1.0 / motion.frame_time, duration_s=motion.frames.shape[0] * motion.frame_time,
+        pain_score=pain_score, note=note, uploaded_by=user,
+    )
+    suffix = ".bvh.gz" if parsed.content[:2] == b"\x1f\x8b" else ".bvh"
+    recording.file.save(f"{recording.pk}{suffix}", ContentFile(parsed.content), save=False)
+    recording.save()
+    Patient.objects.filter(pk=patient.pk).update(last_activity_at=timezone.now())
+    run = services.start_analysis(recording) if exercise is not None else None
+    return recording, run

@@ -1,0 +1,12 @@
+from django.urls import path
+
+from webapp.recordings import views
+
+app_name = "recordings"
+
+urlpatterns = [
+    path("upload/", views.upload, name="upload"),
+    path("<uuid:pk>/", views.detail, name="detail"),
+    path("<uuid:pk>/status/", views.status, name="status"),
+    path("<uuid:pk>/rerun/", views.rerun, name="rerun"),
+]

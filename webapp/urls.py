@@ -1,0 +1,21 @@
+from django.conf import settings
+from django.contrib import admin
+from django.urls import include, path
+
+from webapp.dashboard.views import healthz
+
+urlpatterns = [
+    path("healthz", healthz, name="healthz"),
+    path("accounts/", include("webapp.accounts.urls")),
+    path("admin/", admin.site.urls),
+    path("api/", include("webapp.api.urls")),
+    path("patients/", include("webapp.patients.urls")),
+    path("exercises/", include("webapp.exercises.urls")),
+    path("recordings/", include("webapp.recordings.urls")),
+    path("", include("webapp.dashboard.urls")),
+]
+
+if settings.DEBUG:
+    from django.conf.urls.static import static
+
+    urlpatterns += static(settings.MEDIA_URL, document_root=settings.MEDIA_ROOT)

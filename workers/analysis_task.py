@@ -1,0 +1,102 @@
+"""Analysing one recording: claim the run, call the pipeline, store summary and arrays."""
+
+from __future__ import annotations
+
+import io
+import logging
+import socket
+import traceback
+from typing import Any
+
+import numpy as np
+from django.core.files.base import ContentFile
+from django.db import transaction
+
+from analysis import __version__ as code_version
+from analysis.bvh import read
+from analysis.errors import AnalysisInputError
+from analysis.pipeline import analyse
+from webapp.patients.models import PerformanceLevel
+from webapp.recordings.models import AnalysisRun
+from workers import exercise_models, runs
+
+log = logging.getLogger(__name__)
+GENERIC_FAILURE = "The analysis failed unexpectedly. The team has the details; please try again later."
+
+
+def worker_name() -> str:
+    return socket.gethostname()
+
+
+def analyse_run(run_id: str) -> str:
+    """Run one analysis to its end. Returns the final status, or 'skipped' if not ours."""
+    token = runs.claim(run_id, worker_name())
+    if token is None:
+        return "skipped"
+    run = AnalysisRun.objects.select_related("recording__exercise", "recording__patient").get(
+        pk=run_id
+    )
+    try:
+        summary, arrays, model_row = compute(run, token)
+    except AnalysisInputError as error:
+        runs.fail(run_id, token, str(error), traceback.format_exc())
+        return "failed"
+    except Exception as error:  # the run must end with a reason whatever went wrong
+        log.exception("analysis %s failed", run_id)
+        runs.fail(run_id, token, GENERIC_FAILURE, f"{error!r}\n{traceback.format_exc()}")
+        return "failed"
+    store(run, token, summary, arrays, model_row)
+    return "succeeded"
+
+
+def compute(run: AnalysisRun, token: str) -> tuple[dict[str, Any], dict[str, np.ndarray], Any]:
+    recording = run.recording
+    if recording.exercise is None:
+        raise AnalysisInputError("Choose the exercise of this recording before analysing it.")
+    runs.report(str(run.pk), token, "loading", 2)
+    with recording.file.open("rb") as handle:
+        motion = read(handle.read())
+    model_row, model = exercise_models.active_model(recording.exercise)
+    history = previous_levels(recording)
+
+    def on_progress(stage: str, fraction: float) -> None:
+        runs.report(str(run.pk), token, stage, 5 + int(90 * fraction))
+
+    result = analyse(motion, model, history=history, on_progress=on_progress)
+    return result.to_json(), result.arrays(), model_row
+
+
+def previous_levels(recording) -> dict[str, float]:
+    levels = PerformanceLevel.objects.filter(
+        patient=recording.patient, exercise=recording.exercise
+    ).values_list("joint", "gamma")
+    return dict(levels)
+
+
+def npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **arrays)
+    return buffer.getvalue()
+
+
+def store(run: AnalysisRun, token: str, summary: dict, arrays: dict, model_row) -> None:
+    name = f"{run.pk}.npz"
+    stored = run.arrays.storage.save(f"runs/{name}", ContentFile(npz_bytes(arrays)))
+    with transaction.atomic():
+        finished = runs.succeed(
+            str(run.pk), token, summary=summary, arrays=stored, model=model_row,
+            code_version=code_version,
+        )
+        if finished:
+            save_levels(run, summary.get("gamma", {}))
+    if not finished:
+        run.arrays.storage.delete(stored)
+
+
+def save_levels(run: AnalysisRun, gamma: dict[str, float]) -> None:
+    recording = run.recording
+    for joint, value in gamma.items():
+        PerformanceLevel.objects.update_or_create(
+            patient=recording.patient, exercise=recording.exercise, joint=joint,
+            defaults={"gamma": float(value)},
+        )

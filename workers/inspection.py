@@ -1,0 +1,23 @@
+"""Reading an uploaded recording's file and recording its basic facts."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from analysis.bvh import read
+
+from webapp.recordings.models import Recording
+
+
+def inspect_recording(recording_id: str) -> dict[str, Any]:
+    recording = Recording.objects.get(pk=recording_id)
+    with recording.file.open("rb") as handle:
+        motion = read(handle.read())
+    facts = {
+        "n_frames": int(motion.frames.shape[0]),
+        "n_joints": len(motion.skeleton.names),
+        "fps": 1.0 / motion.frame_time,
+        "duration_s": motion.frames.shape[0] * motion.frame_time,
+    }
+    Recording.objects.filter(pk=recording.pk).update(**facts)
+    return facts
