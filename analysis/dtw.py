@@ -319,35 +319,22 @@ def _run_batch(
     lo = np.concatenate([bands[len(f)][0] for f in frames])
     hi = np.concatenate([bands[len(f)][1] for f in frames])
     poffs = np.concatenate([[0], np.cumsum(np.diff(offsets) + m)]).astype(np.int64)
-    costs, plens = np.empty(B), np.zeros(B, np.int64)
-    out = np.empty((int(poffs[-1]) if paths else 1, 2), np.int64)
+    r = _Batch(frames, ya, np.empty(B), np.empty((int(poffs[-1]) if paths else 1, 2), np.int64),
+               poffs, np.zeros(B, np.int64))  # fmt: skip
     C = np.empty((N, m))
     flags = (bool(opt.open_begin), bool(opt.open_end), bool(opt.path_length_weighting))
+    tail = (r.costs, r.paths, r.lengths)
 
     def work(b0: int, b1: int) -> None:
         r0, r1 = int(offsets[b0]), int(offsets[b1])
         ci.rows(r0, r1, lo, hi, C[r0:r1])
-        kern.batch(
-            C,
-            offsets,
-            lo,
-            hi,
-            *flags,
-            opt.step == "type-v",
-            paths,
-            poffs,
-            costs,
-            out,
-            plens,
-            b0,
-            b1,
-        )
+        kern.batch(C, offsets, lo, hi, *flags, opt.step == "type-v", paths, poffs, *tail, b0, b1)
 
     _parallel([functools.partial(work, a, b) for a, b in _cuts(B, N * m)])
-    if not np.all(np.isfinite(costs)):
-        bad = int(np.flatnonzero(~np.isfinite(costs))[0])
+    if not np.all(np.isfinite(r.costs)):
+        bad = int(np.flatnonzero(~np.isfinite(r.costs))[0])
         raise ValueError(f"no admissible warping path for query {bad} with these options")
-    return _Batch(frames, ya, costs, out, poffs, plens)
+    return r
 
 
 def _cuts(count: int, cells: int) -> list[tuple[int, int]]:

@@ -108,6 +108,18 @@ class JointWeightOptimizer:
             errors.append(alignment_error(aligned_pairs(C, opt, self.target), lab, ref_labels))
         return float(np.mean(errors))
 
+    def _strategy(self, joints: int) -> cma.CMAEvolutionStrategy:
+        """CMA-ES as in paper 000: start at w = 1 with step 0.02, mu = 6 of lambda = 12.
+
+        The fitness is piecewise constant (a share of frames), so the flat-fitness and stagnation
+        stops are pushed out to the iteration budget."""
+        options = {
+            "popsize": self.offspring, "CMA_mu": self.parents, "seed": self.seed + 1,
+            "maxiter": self.iterations, "verbose": -9, "tolfun": 0, "tolfunhist": 0, "tolx": 0,
+            "tolflatfitness": self.iterations, "tolstagnation": self.iterations,
+        }  # fmt: skip
+        return cma.CMAEvolutionStrategy(np.ones(joints), self.sigma0, options)
+
     def fit(
         self,
         reference: npt.ArrayLike,
@@ -118,8 +130,7 @@ class JointWeightOptimizer:
         """reference (m, d) with segment labels (m,); recordings (n_k, d) with labels (n_k,)."""
         ref = as_frames(reference, "reference")
         frames = [as_frames(r, "recording") for r in recordings]
-        lab = [np.asarray(x) for x in labels]
-        ref_lab = np.asarray(reference_labels)
+        lab, ref_lab = [np.asarray(x) for x in labels], np.asarray(reference_labels)
         groups = None if self.joints is None else np.ones(self.joints)
         J = n_joints(ref.shape[1], self.options.cost, groups)
 
@@ -127,34 +138,18 @@ class JointWeightOptimizer:
             return self._error(np.abs(w), frames, ref, lab, ref_lab)
 
         self.initial_error_ = error(np.ones(J))
-        es = cma.CMAEvolutionStrategy(
-            np.ones(J),
-            self.sigma0,
-            {
-                "popsize": self.offspring,
-                "CMA_mu": self.parents,
-                "seed": self.seed + 1,
-                "maxiter": self.iterations,
-                "verbose": -9,
-                "tolfun": 0,
-                "tolfunhist": 0,
-                "tolx": 0,
-                "tolflatfitness": self.iterations,
-                "tolstagnation": self.iterations,
-            },
-        )
+        es = self._strategy(J)
         best_w, best_f, self.history_ = np.ones(J), self.initial_error_, []
         # the compiled cost and DP kernels release the GIL: offspring are scored on all cores
-        pool = ThreadPoolExecutor(max_workers=self.n_threads)
-        while not es.stop():
-            X = es.ask()
-            f = list(pool.map(error, X))
-            es.tell(X, f)
-            k = int(np.argmin(f))
-            if f[k] < best_f:
-                best_w, best_f = np.abs(X[k]), f[k]
-            self.history_.append(best_f)
-        pool.shutdown()
+        with ThreadPoolExecutor(max_workers=self.n_threads) as pool:
+            while not es.stop():
+                X = es.ask()
+                f = list(pool.map(error, X))
+                es.tell(X, f)
+                k = int(np.argmin(f))
+                if f[k] < best_f:
+                    best_w, best_f = np.abs(X[k]), f[k]
+                self.history_.append(best_f)
         self.weights_ = best_w / best_w.mean() if best_w.mean() > 0 else np.ones(J)
         self.error_ = best_f
         return self

@@ -110,6 +110,37 @@ def training_observations(
     return features[frames], frame_types(n, landmark_frames, types)[frames]
 
 
+class Boosted(ClassifierMixin, BaseEstimator):
+    """AdaBoost (SAMME) over ``estimator`` that keeps the lone estimator when boosting cannot start
+    (its first round is no better than chance), as Weka's AdaBoostM1 does."""
+
+    def __init__(
+        self, *, estimator: ClassifierMixin, n_estimators: int = 10, random_state: int = 0
+    ) -> None:
+        self.estimator = estimator
+        self.n_estimators = n_estimators
+        self.random_state = random_state
+
+    def fit(self, X: FloatArray, y: IntArray) -> Boosted:
+        boost = AdaBoostClassifier(
+            clone(self.estimator), n_estimators=self.n_estimators, random_state=self.random_state
+        )
+        try:
+            self.model_ = boost.fit(X, y)
+        except ValueError as error:
+            if "worse than random" not in str(error):
+                raise
+            self.model_ = clone(self.estimator).fit(X, y)
+        self.classes_ = self.model_.classes_
+        return self
+
+    def predict(self, X: FloatArray) -> IntArray:
+        return np.asarray(self.model_.predict(X))
+
+    def predict_proba(self, X: FloatArray) -> FloatArray:
+        return np.asarray(self.model_.predict_proba(X))
+
+
 def make_classifier(
     name: ClassifierName, adaboost: bool, n_estimators: int = 10, seed: int = 0
 ) -> ClassifierMixin:
@@ -124,7 +155,7 @@ def make_classifier(
     else:
         raise ValueError(f"unknown classifier {name!r}")
     if adaboost:
-        base = AdaBoostClassifier(base, n_estimators=n_estimators, random_state=seed)
+        base = Boosted(estimator=base, n_estimators=n_estimators, random_state=seed)
     elif name == "c45":
         return base
     return make_pipeline(SimpleImputer(strategy="mean", add_indicator=True), base)

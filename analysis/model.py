@@ -119,7 +119,7 @@ def load_model(source: bytes | IO[bytes]) -> ExerciseModel:
             f"the model was saved in format {version.decode(errors='replace')}; this code reads "
             f"format {FORMAT_VERSION}. Rebuild the exercise model."
         )
-    model = pickle.load(stream)  # noqa: S301 (our own artefacts, written by dump_model)
+    model = pickle.load(stream)
     if not isinstance(model, ExerciseModel):
         raise ModelVersionError("the model file holds something else")
     return model

@@ -6,6 +6,7 @@ one small function: involved joints, progress axis, repetition templates, score 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -13,11 +14,17 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from analysis.assessment import (
+    LandmarkAssessor,
+    ThresholdAssessor,
+    joint_relevance,
+    landmark_features,
+    tutor_mean_poses,
+)
 from analysis.bvh import Motion
 from analysis.kinematics import rotations
-from analysis.pipeline_levels import mean_poses
 from analysis.posefeatures import flatten, relative_to_start, scaled_positions
-from analysis.scoring import ScoreScale, calibrate_scale, repetition_distance
+from analysis.scoring import RepetitionScorer, deviations, fit_scorer
 from analysis.segmentation import fit_axis
 
 FloatArray = npt.NDArray[np.float64]
@@ -44,18 +51,21 @@ def mirror_permutation(names: Sequence[str]) -> list[int]:
     return out
 
 
-def moving_joints(points: FloatArray, names: Sequence[str], share: float = 0.35) -> list[str]:
-    """Joints whose (root-relative) movement is at least ``share`` of the largest, in file order."""
-    spread = np.linalg.norm(points.std(axis=0), axis=-1)
-    spread[0] = 0.0  # the root is the origin of root-relative positions
-    keep = spread >= share * spread.max() if spread.max() > 0 else spread >= 0
-    return [n for n, k in zip(names, keep, strict=True) if k]
+def moving_joints(
+    tutor: Motion, frames: Sequence[int], types: Sequence[int], min_deg: float = 15.0
+) -> list[str]:
+    """Joints whose rotation differs by at least ``min_deg`` between the tutor's key-pose types
+    (at least the three that differ most), in file order; the root is never one of them."""
+    relevance = joint_relevance(tutor_mean_poses(rotations(tutor), frames, types))
+    relevance[0] = 0.0
+    keep = relevance >= min(min_deg, float(np.sort(relevance)[-3]))
+    return [n for n, k in zip(tutor.skeleton.names, keep, strict=True) if k]
 
 
 def tutor_repetitions(frames: Sequence[int], types: Sequence[int]) -> list[tuple[int, int]]:
-    """(start, end) of each tutor repetition: from one type-1 landmark to the frame before the next."""
+    """(start, end) of each tutor repetition: a type-1 landmark to the frame before the next."""
     starts = [f for f, t in zip(frames, types, strict=True) if t == 1]
-    return [(a, max(b - 1, a)) for a, b in zip(starts[:-1], starts[1:], strict=True)]
+    return [(a, max(b - 1, a)) for a, b in itertools.pairwise(starts)]
 
 
 def templates(features: FloatArray, reps: list[tuple[int, int]]) -> list[FloatArray]:
@@ -67,7 +77,7 @@ def _end_of_range(frames: Sequence[int], types: Sequence[int]) -> npt.NDArray[np
     return np.array([f for f, t in zip(frames, types, strict=True) if t != 1], dtype=np.int64)
 
 
-def fit_components(
+def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
     tutor: Motion,
     frames: list[int],
     types: list[int],
@@ -79,7 +89,7 @@ def fit_components(
     report = on_progress or (lambda stage, fraction: None)
     names = tutor.skeleton.names
     all_points = scaled_positions(tutor, list(range(len(names))))
-    involved = list(joints) if joints else moving_joints(all_points, names)
+    involved = list(joints) if joints else moving_joints(tutor, frames, types)
     unknown = sorted(set(involved) - set(names))
     if unknown:
         raise ValueError(f"the tutor has no joint named {', '.join(unknown)}")
@@ -90,36 +100,64 @@ def fit_components(
     starts = np.array([a for a, _ in reps], dtype=np.int64)
     axis = fit_axis(flatten(all_points), starts, _end_of_range(frames, types))
     involved_idx = [names.index(n) for n in involved]
-    movement = flatten(all_points[:, involved_idx])
-    tutor_templates = templates(movement, reps)
+    # Scores look at every joint but the root (the origin): compensations show in joints that
+    # the exercise does not move.
+    scored = list(range(1, len(names)))
+    tutor_templates = templates(flatten(all_points[:, scored]), reps)
     report("calibration", 0.5)
-    scale = calibrate_scale(tutor_templates, training_distances(training, tutor_templates, involved))
+    labelled = training_deviations(training, tutor_templates, [names[j] for j in scored])
+    scorer = fit_scorer(tutor_templates, labelled)
     components = {
         "axis": axis,
         "mirror": mirror_permutation(names),
         "involved_index": involved_idx,
+        "scored_index": scored,
         "templates": tutor_templates,
-        "score_scale": scale,
+        "scorer": scorer,
         "tutor_reps": reps,
-        "mean_poses": mean_poses(rotations(tutor), frames, types),
+        **assessment_parts(tutor, frames, types, training),
     }
     report("done", 1.0)
-    return components, involved, {"tutor_repetitions": len(reps), "score_scale": scale.as_dict()}
+    summary = {"tutor_repetitions": len(reps), "labelled_repetitions": len(labelled)}
+    return components, involved, {**summary, "scorer": scorer.as_dict()}
 
 
-def training_distances(
-    training: Sequence[TrainingRecording], tutor_templates: list[FloatArray], involved: list[str]
-) -> list[tuple[float, bool]]:
-    """(distance to the tutor, is correct) for every repetition of the labelled recordings."""
-    out: list[tuple[float, bool]] = []
+def assessment_parts(
+    tutor: Motion, frames: list[int], types: list[int], training: Sequence[TrainingRecording]
+) -> dict[str, Any]:
+    """Tutor mean poses per landmark type and the per-joint assessor: trained on recordings
+    labelled with a level (1..4, applied to each of their landmarks) when there are some, else
+    the threshold fallback calibrated on the tutor's own variability."""
+    tutor_q = rotations(tutor)
+    means = tutor_mean_poses(tutor_q, frames, types)
+    assessor: Any = ThresholdAssessor().fit(landmark_features(tutor_q, frames, types, means), types)
+    leveled = [t for t in training if t.label in ("1", "2", "3", "4")]
+    if leveled:
+        feats, levels, kinds = [], [], []
+        for item in leveled:
+            known = [(f, k) for f, k in zip(item.landmark_frames, item.landmark_types, strict=True)
+                     if k in means]  # fmt: skip
+            q = rotations(item.motion)
+            feats.append(landmark_features(q, [f for f, _ in known], [k for _, k in known], means))
+            levels.append(np.full(feats[-1].shape[:2], int(item.label)))
+            kinds += [k for _, k in known]
+        assessor = LandmarkAssessor().fit(np.concatenate(feats), np.concatenate(levels), kinds)
+    return {"mean_poses": means, "assessor": assessor}
+
+
+def training_deviations(
+    training: Sequence[TrainingRecording], tutor_templates: list[FloatArray], joints: list[str]
+) -> list[tuple[FloatArray, bool]]:
+    """(deviation vector, is correct) for every repetition of the labelled recordings."""
+    out: list[tuple[FloatArray, bool]] = []
     for item in training:
         names = item.motion.skeleton.names
-        feats = flatten(scaled_positions(item.motion, [names.index(n) for n in involved]))
+        feats = flatten(scaled_positions(item.motion, [names.index(n) for n in joints]))
         correct = item.label in ("correct", "1")
         for a, b in tutor_repetitions(item.landmark_frames, item.landmark_types):
             segment = relative_to_start(feats[a : b + 1])
-            out.append((repetition_distance(segment, tutor_templates), correct))
+            out.append((deviations(segment, tutor_templates), correct))
     return out
 
 
-__all__ = ["ScoreScale", "TrainingRecording", "fit_components", "mirror_permutation"]
+__all__ = ["RepetitionScorer", "TrainingRecording", "fit_components", "mirror_permutation"]

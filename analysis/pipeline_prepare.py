@@ -48,7 +48,9 @@ def check_length(motion: Motion, rep_frames: float, model_fps: float) -> None:
         )
 
 
-def prepare(motion: Motion, model_names: tuple[str, ...], fps: float, rep_frames: float) -> Prepared:
+def prepare(
+    motion: Motion, model_names: tuple[str, ...], fps: float, rep_frames: float
+) -> Prepared:
     """Map joints (SkeletonMismatchError if impossible), resample, compute features."""
     mapping = map_joints(model_names, motion.skeleton.names)
     check_length(motion, rep_frames, fps)

@@ -10,13 +10,16 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis import quaternions as quat
+from analysis.adjustment import Performance, demonstration_skeletons, gamma_vector
+from analysis.assessment import landmark_features
 from analysis.feedback import Grammar, LandmarkAssessment
 from analysis.guidance import guidance_for
+from analysis.kinematics import translations
 from analysis.model import ExerciseModel
-from analysis.pipeline_levels import gamma_update, joint_levels, tutor_mean_pose
+from analysis.performance_level import update_levels
 from analysis.pipeline_prepare import Prepared
 from analysis.posefeatures import flatten, range_of_motion, relative_to_start
-from analysis.scoring import repetition_distance
+from analysis.scoring import deviations
 from analysis.segmentation import Segments
 
 FloatArray = npt.NDArray[np.float64]
@@ -29,7 +32,9 @@ def label_landmarks(prepared: Prepared, segments: Segments, model: ExerciseModel
     marks: list[dict] = []
     for start, peak in zip(segments.starts, segments.peaks, strict=True):
         marks.append({"frame": int(start), "type": 1})
-        marks.append({"frame": int(peak), "type": _closest_type(prepared, int(peak), peak_types, model)})
+        marks.append(
+            {"frame": int(peak), "type": _closest_type(prepared, int(peak), peak_types, model)}
+        )
     if segments.ends.size:
         marks.append({"frame": int(segments.ends[-1]), "type": 1})
     return marks
@@ -39,7 +44,8 @@ def _closest_type(prepared: Prepared, frame: int, types: list[int], model: Exerc
     if len(types) == 1:
         return types[0]
     pose = prepared.local_q[frame]
-    costs = [quat.angle_between(tutor_mean_pose(model, t), pose).sum() for t in types]
+    means = model.components["mean_poses"]
+    costs = [quat.angle_between(means[t], pose).sum() if t in means else np.inf for t in types]
     return types[int(np.argmin(costs))]
 
 
@@ -48,18 +54,18 @@ def repetition_results(
 ) -> list[dict[str, Any]]:
     """Per repetition: frames, score 0–100, distance to the tutor, guidance, tempo."""
     parts = model.components
-    movement = flatten(prepared.points[:, parts["involved_index"]])
+    movement = flatten(prepared.points[:, parts["scored_index"]])
     tutor_frames = float(np.median([len(t) for t in parts["templates"]]))
     out = []
     for start, end, peak in zip(segments.starts, segments.ends, segments.peaks, strict=True):
         segment = relative_to_start(movement[start : end + 1])
-        distance = repetition_distance(segment, parts["templates"])
+        dev = deviations(segment, parts["templates"])
         reach = float(progress[peak] - progress[start])
         tempo = (end - start + 1) / tutor_frames
         out.append({
             "start": int(start), "end": int(end), "peak": int(peak),
-            "score": round(parts["score_scale"].score(distance), 2),
-            "distance": round(distance, 5), "reach": round(reach, 3),
+            "score": round(parts["scorer"].score(dev), 2),
+            "deviation": round(float(dev.mean()), 5), "reach": round(reach, 3),
             "tempo": round(float(tempo), 3), "guidance": guidance_for(tempo, reach),
         })  # fmt: skip
     return out
@@ -69,16 +75,18 @@ def assess_landmarks(
     prepared: Prepared, landmarks: list[dict], model: ExerciseModel
 ) -> list[dict[str, Any]]:
     """Per landmark, a level 1 (as the tutor) … 4 for every involved joint."""
-    names = model.joint_names
-    involved = model.components["involved_index"]
-    out = []
-    for mark in landmarks:
-        levels = joint_levels(prepared.local_q[mark["frame"]], tutor_mean_pose(model, mark["type"]))
-        out.append({
-            "frame": mark["frame"], "type": mark["type"],
-            "levels": {names[j]: int(levels[j]) for j in involved},
-        })  # fmt: skip
-    return out
+    means = model.components["mean_poses"]
+    marks = [m for m in landmarks if m["type"] in means]
+    if not marks:
+        return []
+    frames, types = [m["frame"] for m in marks], [m["type"] for m in marks]
+    features = landmark_features(prepared.local_q, frames, types, means)
+    levels = model.components["assessor"].predict(features, types)
+    names, involved = model.joint_names, model.components["involved_index"]
+    return [
+        {"frame": f, "type": t, "levels": {names[j]: int(row[j]) for j in involved if row[j] > 0}}
+        for f, t, row in zip(frames, types, levels, strict=True)
+    ]
 
 
 def feedback_items(
@@ -88,21 +96,39 @@ def feedback_items(
     grammar = Grammar.parse(model.grammar)
     assessed = [LandmarkAssessment.from_dict(a) for a in assessment]
     comments = [c.to_dict() for c in grammar.comments(assessed)]
-    return comments, gamma_update(history, assessment, list(model.involved_joints))
+    per_joint: dict[str, list[int]] = {}
+    for item in assessment:
+        for joint, level in item["levels"].items():
+            per_joint.setdefault(joint, []).append(level)
+    gamma = update_levels(history, per_joint)
+    return comments, {j: round(v, 4) for j, v in gamma.items()}
 
 
 def playback_arrays(
     prepared: Prepared, landmarks: list[dict], model: ExerciseModel, gamma: Mapping[str, float]
 ) -> dict[str, npt.NDArray[Any]]:
-    """Per-frame world positions (float32) for the viewer and the charts."""
-    from analysis.kinematics import positions
-
-    patient = positions(prepared.motion)[:, prepared.joint_index]
+    """The four demonstration skeletons (paper 004, 7.3) as world positions (F, J, 3) float32 on
+    the patient's timeline, with the model's joint names and parents, and the landmarks."""
+    skeleton = model.tutor.skeleton
+    frames = np.array([m["frame"] for m in landmarks], dtype=np.int64)
+    types = np.array([m["type"] for m in landmarks], dtype=np.int64)
+    patient_t = translations(prepared.motion)[:, prepared.joint_index]
+    patient = Performance(prepared.local_q, patient_t, frames, types)
+    tutor = Performance.from_motion(model.tutor, model.landmark_frames, model.landmark_types)
+    demo = demonstration_skeletons(
+        skeleton, patient, tutor, model.components["mean_poses"],
+        gamma_vector(dict(gamma), skeleton.names), tutor_root="patient",
+    )  # fmt: skip
     return {
-        "patient_positions": patient.astype(np.float32),
-        "parents": model.tutor.skeleton.parents.astype(np.int32),
-        "landmark_frames": np.array([m["frame"] for m in landmarks], dtype=np.int32),
-        "landmark_types": np.array([m["type"] for m in landmarks], dtype=np.int32),
+        "patient_positions": demo.patient.astype(np.float32),
+        "patient_adjusted_positions": demo.patient_adjusted.astype(np.float32),
+        "tutor_positions": demo.tutor.astype(np.float32),
+        "tutor_adjusted_positions": demo.tutor_adjusted.astype(np.float32),
+        "tutor_frame_map": demo.tutor_frame_map.astype(np.float32),
+        "parents": skeleton.parents.astype(np.int32),
+        "joint_names": np.array(skeleton.names),
+        "landmark_frames": frames.astype(np.int32),
+        "landmark_types": types.astype(np.int32),
     }
 
 

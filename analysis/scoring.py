@@ -1,18 +1,23 @@
-"""Scores 0–100 for repetitions: distance to the tutor's repetitions, mapped by a calibrated curve.
+"""Scores 0–100 for repetitions from per-joint deviations from the tutor's repetitions.
 
-The distance of a patient repetition is the smallest path-normalised DTW cost to any tutor
-repetition, both taken relative to their own starting pose (so body build and where the patient
-stands do not count, only the movement). The curve is a logistic function of the distance:
-score = 100 / (1 + exp((d − d₅₀) / w)). Cold start (tutor only): d₅₀ and w come from how much
-the tutor's own repetitions differ from each other. With labelled recordings, d₅₀ and w are
-fitted by logistic regression of "correct" on distance, so a score is the estimated chance (in %)
-that a therapist would call the repetition correct.
+A repetition is compared with every tutor repetition, both taken relative to their own starting
+pose (so body build and where the patient stands do not count, only the movement). DTW aligns it
+with the closest tutor repetition; along that path the mean distance of each joint gives a
+deviation vector (J,), in body sizes. Deviations are standardised by how much the tutor's own
+repetitions deviate from each other (leave one out), so a joint that normally stays still and
+moves here (a compensation) stands out as much as a main joint that falls short.
+
+Cold start (tutor only): the *excess* z = mean over joints of max(0, zⱼ) is mapped to a score by
+100 / (1 + exp((z − z₅₀) / w)) with z₅₀ = `COLD_MIDPOINT` and w = `COLD_WIDTH` standard deviations.
+With labelled recordings: a logistic regression of "correct" on the standardised deviations, so a
+score is the estimated chance (in %) that a therapist would call the repetition correct.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -21,57 +26,87 @@ from analysis.dtw import DTWOptions, align
 
 FloatArray = npt.NDArray[np.float64]
 _OPTIONS = DTWOptions()
+COLD_MIDPOINT = 1.5
+COLD_WIDTH = 0.5
+SIGMA_FLOOR = 0.01  # body sizes: no joint is trusted to repeat closer than 1 % of body size
 
 
-@dataclass(frozen=True)
-class ScoreScale:
-    """The logistic curve from distance to score: midpoint ``d50`` and width ``w``."""
+def joint_deviations(segment: FloatArray, template: FloatArray) -> tuple[FloatArray, float]:
+    """Per-joint mean distance (J,) along the DTW path of (n, 3J) vs (m, 3J), and its cost."""
+    result = align(segment, template, _OPTIONS)
+    i, j = result.path[:, 0], result.path[:, 1]
+    diff = (segment[i] - template[j]).reshape(len(i), -1, 3)
+    return np.linalg.norm(diff, axis=-1).mean(axis=0), result.cost / len(i)
 
-    d50: float
-    width: float
-    source: str
 
-    def score(self, distance: float) -> float:
-        z = np.clip((distance - self.d50) / max(self.width, 1e-9), -50.0, 50.0)
-        return float(100.0 / (1.0 + np.exp(z)))
-
-    def as_dict(self) -> dict[str, float | str]:
-        return {"d50": self.d50, "width": self.width, "source": self.source}
+def deviations(segment: FloatArray, templates: Sequence[FloatArray]) -> FloatArray:
+    """Deviation vector (J,) to the closest tutor repetition (smallest mean path cost)."""
+    best: tuple[float, FloatArray] | None = None
+    for template in templates:
+        dev, cost = joint_deviations(segment, template)
+        if best is None or cost < best[0]:
+            best = (cost, dev)
+    assert best is not None
+    return best[1]
 
 
 def repetition_distance(segment: FloatArray, templates: Sequence[FloatArray]) -> float:
     """Smallest mean-per-step DTW cost of ``segment`` (n, D) to any template (m_k, D)."""
-    best = np.inf
-    for template in templates:
-        result = align(segment, template, _OPTIONS)
-        best = min(best, result.cost / len(result.path))
-    return float(best)
+    return float(min(joint_deviations(segment, t)[1] for t in templates))
 
 
-def _tutor_spread(templates: Sequence[FloatArray]) -> float:
-    """Median leave-one-out distance among the tutor's own repetitions."""
+@dataclass(frozen=True, eq=False)
+class RepetitionScorer:
+    """Turns a deviation vector into a score (see the module docstring)."""
+
+    mean: FloatArray
+    spread: FloatArray
+    classifier: Any = None
+
+    @property
+    def source(self) -> str:
+        return "labelled recordings" if self.classifier is not None else "tutor repetitions"
+
+    def standardise(self, dev: FloatArray) -> FloatArray:
+        return (dev - self.mean) / self.spread
+
+    def score(self, dev: FloatArray) -> float:
+        z = self.standardise(dev)
+        if self.classifier is not None:
+            return float(100.0 * self.classifier.predict_proba(z[None])[0, 1])
+        excess = float(np.mean(np.maximum(z, 0.0)))
+        return float(
+            100.0 / (1.0 + np.exp(np.clip((excess - COLD_MIDPOINT) / COLD_WIDTH, -50, 50)))
+        )
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"source": self.source, "joints": int(self.mean.size)}
+
+
+def tutor_statistics(templates: Sequence[FloatArray]) -> tuple[FloatArray, FloatArray]:
+    """Mean and spread (J,) of the tutor's leave-one-out deviations."""
     if len(templates) < 2:
-        return float(np.mean(np.linalg.norm(templates[0], axis=1))) * 0.1 + 1e-6
-    others = [
-        repetition_distance(t, [u for j, u in enumerate(templates) if j != k])
-        for k, t in enumerate(templates)
-    ]
-    return float(np.median(others)) + 1e-6
+        n_joints = templates[0].shape[1] // 3
+        return np.zeros(n_joints), np.full(n_joints, 5 * SIGMA_FLOOR)
+    loo = np.array([
+        deviations(t, [u for k, u in enumerate(templates) if k != i])
+        for i, t in enumerate(templates)
+    ])  # fmt: skip
+    spread = np.maximum(loo.std(axis=0), np.maximum(0.25 * loo.mean(axis=0), SIGMA_FLOOR))
+    return loo.mean(axis=0), spread
 
 
-def calibrate_scale(
-    templates: Sequence[FloatArray], labelled: Sequence[tuple[float, bool]] = ()
-) -> ScoreScale:
-    """The score curve (see the module docstring)."""
-    classes = {correct for _, correct in labelled}
-    if len(classes) == 2:
-        from sklearn.linear_model import LogisticRegression
+def fit_scorer(
+    templates: Sequence[FloatArray], labelled: Sequence[tuple[FloatArray, bool]] = ()
+) -> RepetitionScorer:
+    """Cold-start scorer from the tutor; with both classes labelled, a fitted classifier too."""
+    mean, spread = tutor_statistics(templates)
+    scorer = RepetitionScorer(mean, spread)
+    if len({correct for _, correct in labelled}) < 2:
+        return scorer
+    from sklearn.linear_model import LogisticRegression
 
-        d = np.array([[x] for x, _ in labelled])
-        y = np.array([c for _, c in labelled])
-        fit = LogisticRegression(C=10.0).fit(d, y)
-        slope, intercept = float(fit.coef_[0, 0]), float(fit.intercept_[0])
-        if slope < 0:
-            return ScoreScale(-intercept / slope, -1.0 / slope, "labelled recordings")
-    spread = _tutor_spread(templates)
-    return ScoreScale(3.0 * spread, 0.75 * spread, "tutor repetitions")
+    z = np.array([scorer.standardise(dev) for dev, _ in labelled])
+    y = np.array([correct for _, correct in labelled])
+    classifier = LogisticRegression(C=0.05, class_weight="balanced", max_iter=2000).fit(z, y)
+    return RepetitionScorer(mean, spread, classifier)

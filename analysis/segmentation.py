@@ -10,6 +10,7 @@ that slower patients and a reduced range of motion still count.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -74,7 +75,7 @@ def segment(progress: FloatArray, rep_frames: float, min_range: float = 0.3) -> 
     if peaks.size == 0:
         empty = np.zeros(0, dtype=np.int64)
         return Segments(empty, empty, empty)
-    cuts = [int(np.argmin(smooth[a:b])) + a for a, b in zip(peaks[:-1], peaks[1:], strict=True)]
+    cuts = [int(np.argmin(smooth[a:b])) + a for a, b in itertools.pairwise(peaks)]
     first = _boundary_before(smooth, int(peaks[0]), rep_frames)
     last = _boundary_after(smooth, int(peaks[-1]), rep_frames)
     starts = np.array([first, *cuts], dtype=np.int64)
@@ -86,7 +87,7 @@ def _boundary_before(signal: FloatArray, peak: int, rep_frames: float) -> int:
     """Where the first repetition leaves the rest pose: the last low point before its peak."""
     lo = max(0, peak - int(1.5 * rep_frames))
     window = signal[lo : peak + 1]
-    floor = window.min() + 0.1 * (signal[peak] - window.min())
+    floor = window.min() + 0.02 * (signal[peak] - window.min())
     below = np.flatnonzero(window <= floor)
     return lo + int(below[-1]) if below.size else lo
 
@@ -95,6 +96,6 @@ def _boundary_after(signal: FloatArray, peak: int, rep_frames: float) -> int:
     """Where the last repetition is back at rest: the first low point after its peak."""
     hi = min(signal.size, peak + int(1.5 * rep_frames) + 1)
     window = signal[peak:hi]
-    floor = window.min() + 0.1 * (signal[peak] - window.min())
+    floor = window.min() + 0.02 * (signal[peak] - window.min())
     below = np.flatnonzero(window <= floor)
     return peak + int(below[0]) if below.size else hi - 1

@@ -10,9 +10,14 @@ landmarks.csv (type 1 start, type 2 end of range); compromise intervals (eq 5.34
 the root-relative, heading-normalised positions of all joints, smoothed over 5 frames. Baseline:
 the tutor's landmarks carried over an offline DTW path on the involved joints (Table 5.8).
 
-    .venv/bin/python -m bench.eval_landmarks            # DTW + faithful + ours, both protocols
-    .venv/bin/python -m bench.eval_landmarks --grid     # also Table 5.5's 36-cell grid
-    .venv/bin/python -m bench.eval_landmarks --quick    # m01, m07 and test subjects s02, s04, s06
+    .venv/bin/python -m bench.eval_landmarks                # DTW + faithful + ours, both protocols
+    .venv/bin/python -m bench.eval_landmarks --ablation     # + faithful → ours one step at a time
+    .venv/bin/python -m bench.eval_landmarks --grid --configs faithful --protocols loso
+                                                            # + Table 5.5's 36-cell grid (slow)
+    .venv/bin/python -m bench.eval_landmarks --quick        # m01, m07, test subjects s02, s04, s06
+
+Timings (s/session) cover signature, identification, refining and periodic analysis of one
+loaded recording (BVH parsing excluded), measured with time.perf_counter.
 """
 
 from __future__ import annotations

@@ -3,6 +3,7 @@ another clinic, the patient, another patient of the same clinic, and anonymous."
 
 from __future__ import annotations
 
+import csv
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -68,14 +69,27 @@ def fixture_bytes(relative: str) -> bytes:
     return (FIXTURES / relative).read_bytes()
 
 
-def make_exercise(clinic: Clinic, name: str = "Deep squat", source: str = "reps/m01_s01_e01.bvh.gz"):
+def fixture_landmarks(relative: str) -> tuple[list[int], list[int]]:
+    """The annotated landmark frames and types of a UI-PRMD file (data/ui-prmd/landmarks.csv)."""
+    with (FIXTURES / "landmarks.csv").open(newline="") as handle:
+        for row in csv.DictReader(handle):
+            if row["file"] == relative:
+                frames = [int(v) for v in row["frames"].split(";")]
+                return frames, [int(v) for v in row["types"].split(";")]
+    raise KeyError(relative)
+
+
+def make_exercise(
+    clinic: Clinic, name: str = "Deep squat", source: str = "reps/m01_s01_e01.bvh.gz"
+):
     from django.core.files.base import ContentFile
 
     from webapp.exercises.models import Exercise
 
+    frames, types = fixture_landmarks(source)
     exercise = Exercise(
-        clinic=clinic, name=name, tutor_landmark_frames=[0, 41, 72],
-        tutor_landmark_types=[1, 2, 1], landmark_type_names={"1": "start", "2": "end of range"},
+        clinic=clinic, name=name, tutor_landmark_frames=frames,
+        tutor_landmark_types=types, landmark_type_names={"1": "start", "2": "end of range"},
     )
     exercise.tutor_file.save("tutor.bvh.gz", ContentFile(fixture_bytes(source)), save=False)
     exercise.save()

@@ -56,6 +56,7 @@ INSTALLED_APPS = [
     "webapp.dashboard",
     "webapp.audit",
     "webapp.api",
+    "webapp.reports",
     "rest_framework",
     "rest_framework.authtoken",
     "drf_spectacular",
@@ -124,6 +125,7 @@ STATIC_ROOT = Path(os.environ.get("STATIC_ROOT", BASE_DIR / "staticfiles"))
 STATICFILES_DIRS = [
     BASE_DIR / "webapp" / "static",
     ("vendor/three", BASE_DIR / "node_modules" / "three"),
+    ("vendor/plotly", Path(__import__("plotly").__file__).parent / "package_data"),
 ]
 WHITENOISE_USE_FINDERS = DEBUG
 MEDIA_URL = "/media/"
@@ -157,6 +159,11 @@ ANALYSIS_SOFT_TIME_LIMIT = int(os.environ.get("ANALYSIS_SOFT_TIME_LIMIT", "300")
 ANALYSIS_TIME_LIMIT = int(os.environ.get("ANALYSIS_TIME_LIMIT", "360"))
 # A RUNNING run whose worker has not reported for this long may be claimed again (worker died).
 ANALYSIS_LEASE_SECONDS = int(os.environ.get("ANALYSIS_LEASE_SECONDS", "60"))
+# Paper 002 retrieval: principal components of the 2-bit codes, and how many recordings to compare.
+RETRIEVAL_COMPONENTS = int(os.environ.get("RETRIEVAL_COMPONENTS", "4"))
+RETRIEVAL_MAX_CANDIDATES = int(os.environ.get("RETRIEVAL_MAX_CANDIDATES", "200"))
+# Only for fault-injection tests (tests/workers/test_worker_crash.py): seconds slept after each stage.
+ANALYSIS_STAGE_DELAY_SECONDS = float(os.environ.get("ANALYSIS_STAGE_DELAY_SECONDS", "0"))
 CELERY_TASK_SOFT_TIME_LIMIT = ANALYSIS_SOFT_TIME_LIMIT
 CELERY_TASK_TIME_LIMIT = ANALYSIS_TIME_LIMIT
 # A message not acknowledged within this time is delivered again: keep it above the longest task.
@@ -166,6 +173,11 @@ CELERY_BROKER_TRANSPORT_OPTIONS = {
 CELERY_BROKER_CONNECTION_RETRY_ON_STARTUP = True
 CELERY_BEAT_SCHEDULE = {
     "reap-stuck-runs": {"task": "workers.tasks.reap_stuck_runs", "schedule": 60.0},
+    "rebuild-models-with-corrections": {
+        "task": "workers.tasks.rebuild_models_with_corrections",
+        "schedule": 3600.0,
+    },
+    "refit-pass-thresholds": {"task": "workers.tasks.refit_pass_thresholds", "schedule": 3600.0},
 }
 
 REST_FRAMEWORK = {

@@ -5,10 +5,12 @@ from __future__ import annotations
 import io
 import logging
 import socket
+import time
 import traceback
 from typing import Any
 
 import numpy as np
+from django.conf import settings
 from django.core.files.base import ContentFile
 from django.db import transaction
 
@@ -21,7 +23,9 @@ from webapp.recordings.models import AnalysisRun
 from workers import exercise_models, runs
 
 log = logging.getLogger(__name__)
-GENERIC_FAILURE = "The analysis failed unexpectedly. The team has the details; please try again later."
+GENERIC_FAILURE = (
+    "The analysis failed unexpectedly. The team has the details; please try again later."
+)
 
 
 def worker_name() -> str:
@@ -61,9 +65,21 @@ def compute(run: AnalysisRun, token: str) -> tuple[dict[str, Any], dict[str, np.
 
     def on_progress(stage: str, fraction: float) -> None:
         runs.report(str(run.pk), token, stage, 5 + int(90 * fraction))
+        stage_delay()
 
     result = analyse(motion, model, history=history, on_progress=on_progress)
     return result.to_json(), result.arrays(), model_row
+
+
+def stage_delay() -> None:
+    """Fault-injection hook: the SIGKILL test slows every stage so it can kill mid-analysis.
+
+    ``ANALYSIS_STAGE_DELAY_SECONDS`` is 0 (no delay) unless a test sets it in the worker's
+    environment; real recordings analyse in well under a second, too fast to interrupt.
+    """
+    delay = float(getattr(settings, "ANALYSIS_STAGE_DELAY_SECONDS", 0.0))
+    if delay > 0:
+        time.sleep(delay)
 
 
 def previous_levels(recording) -> dict[str, float]:
@@ -84,7 +100,11 @@ def store(run: AnalysisRun, token: str, summary: dict, arrays: dict, model_row) 
     stored = run.arrays.storage.save(f"runs/{name}", ContentFile(npz_bytes(arrays)))
     with transaction.atomic():
         finished = runs.succeed(
-            str(run.pk), token, summary=summary, arrays=stored, model=model_row,
+            str(run.pk),
+            token,
+            summary=summary,
+            arrays=stored,
+            model=model_row,
             code_version=code_version,
         )
         if finished:
@@ -97,6 +117,8 @@ def save_levels(run: AnalysisRun, gamma: dict[str, float]) -> None:
     recording = run.recording
     for joint, value in gamma.items():
         PerformanceLevel.objects.update_or_create(
-            patient=recording.patient, exercise=recording.exercise, joint=joint,
+            patient=recording.patient,
+            exercise=recording.exercise,
+            joint=joint,
             defaults={"gamma": float(value)},
         )

@@ -15,6 +15,7 @@ from analysis.bvh import read
 from analysis.model import ExerciseModel as FittedModel
 from analysis.model import build_model, dump_model, load_model
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
+from workers import training
 
 # Loaded models by row id: a worker analyses many recordings of the same few exercises.
 _cache: dict[str, FittedModel] = {}
@@ -30,6 +31,7 @@ def fit_for_exercise(exercise: Exercise, on_progress=None) -> FittedModel:
         joints=list(exercise.involved_joints) or None,
         type_names={int(k): v for k, v in exercise.landmark_type_names.items()},
         grammar=exercise.feedback_grammar or None,
+        training=training.training_recordings(exercise),
         on_progress=on_progress,
     )
 
@@ -42,7 +44,9 @@ def next_version(exercise: Exercise) -> int:
 def save_fitted(row: ExerciseModel, fitted: FittedModel) -> None:
     buffer = io.BytesIO()
     dump_model(fitted, buffer)
-    row.artefact.save(f"{row.exercise_id}-v{row.version}.model", ContentFile(buffer.getvalue()), save=False)
+    row.artefact.save(
+        f"{row.exercise_id}-v{row.version}.model", ContentFile(buffer.getvalue()), save=False
+    )
     row.training_report = fitted.report
     row.status = ModelStatus.READY
     row.progress = 100
@@ -85,7 +89,7 @@ def active_model(exercise: Exercise) -> tuple[ExerciseModel, Any]:
 
 
 def build_version(model_id: str) -> str:
-    """Claim a QUEUED model row, fit it with progress, activate it; FAILED with a reason on error."""
+    """Claim a QUEUED model row, fit it with progress, activate it; FAILED with a reason."""
     claimed = ExerciseModel.objects.filter(pk=model_id, status=ModelStatus.QUEUED).update(
         status=ModelStatus.RUNNING, progress=1
     )
@@ -105,4 +109,5 @@ def build_version(model_id: str) -> str:
         return "failed"
     save_fitted(row, fitted)
     Exercise.objects.filter(pk=row.exercise_id).update(active_model=row)
+    training.mark_used(row.exercise, row)
     return "ready"

@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Any
 
 from analysis.bvh import read
-
 from webapp.recordings.models import Recording
 
 

@@ -25,8 +25,14 @@ def claim(run_id: str, worker: str) -> str | None:
     token = uuid.uuid4().hex
     claimable = Q(status=RunStatus.QUEUED) | Q(status=RunStatus.RUNNING, heartbeat_at__lt=abandoned)
     updated = AnalysisRun.objects.filter(claimable, pk=run_id).update(
-        status=RunStatus.RUNNING, started_at=now, heartbeat_at=now, lease_token=token,
-        worker=worker[:200], attempts=F("attempts") + 1, stage="starting", progress=0,
+        status=RunStatus.RUNNING,
+        started_at=now,
+        heartbeat_at=now,
+        lease_token=token,
+        worker=worker[:200],
+        attempts=F("attempts") + 1,
+        stage="starting",
+        progress=0,
     )
     return token if updated == 1 else None
 
@@ -47,8 +53,12 @@ def succeed(run_id: str, token: str, **fields: Any) -> bool:
 
 def fail(run_id: str, token: str, user_error: str, developer_error: str) -> bool:
     return _finish(
-        run_id, token, status=RunStatus.FAILED, stage="failed",
-        user_error=user_error[:2000], developer_error=developer_error[:20000],
+        run_id,
+        token,
+        status=RunStatus.FAILED,
+        stage="failed",
+        user_error=user_error[:2000],
+        developer_error=developer_error[:20000],
     )
 
 

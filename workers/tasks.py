@@ -6,7 +6,7 @@ from typing import Any
 
 from celery import shared_task
 
-from workers import analysis_task, exercise_models, housekeeping, inspection
+from workers import analysis_task, exercise_models, housekeeping, inspection, training
 
 
 @shared_task(name="workers.tasks.inspect_recording", autoretry_for=(OSError,), max_retries=3)
@@ -31,3 +31,15 @@ def analyse_recording(run_id: str) -> str:
 def build_exercise_model(model_id: str) -> str:
     """Fit one queued exercise-model version and make it the exercise's active version."""
     return exercise_models.build_version(model_id)
+
+
+@shared_task(name="workers.tasks.rebuild_models_with_corrections")
+def rebuild_models_with_corrections() -> list[str]:
+    """Queue a new model version for exercises whose therapists corrected analyses since."""
+    return training.rebuild_models_with_corrections()
+
+
+@shared_task(name="workers.tasks.refit_pass_thresholds")
+def refit_pass_thresholds() -> int:
+    """Refit paper 001's pass/fail threshold of each exercise from therapist verdicts."""
+    return training.refit_pass_thresholds()

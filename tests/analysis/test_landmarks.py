@@ -2,12 +2,14 @@
 
 import numpy as np
 import pytest
+from sklearn.dummy import DummyClassifier
 from sklearn.ensemble import AdaBoostClassifier
 from sklearn.tree import DecisionTreeClassifier
 
 from analysis.landmark_eval import evaluate
 from analysis.landmarks import (
     FAITHFUL,
+    Boosted,
     LandmarkDetector,
     LandmarkModel,
     LandmarkOptions,
@@ -70,7 +72,19 @@ def test_c45_is_an_entropy_tree_and_adaboost_wraps_it():
     tree = make_classifier("c45", False)
     assert isinstance(tree, DecisionTreeClassifier) and tree.criterion == "entropy"
     boosted = make_classifier("c45", True)
-    assert isinstance(boosted.steps[-1][1], AdaBoostClassifier)
+    assert isinstance(boosted.steps[-1][1], Boosted)
+    x = np.random.default_rng(0).normal(size=(40, 2))
+    y = (x[:, 0] > 0).astype(int)
+    assert isinstance(boosted.fit(x, y).steps[-1][1].model_, AdaBoostClassifier)
+
+
+def test_boosting_that_cannot_start_keeps_the_lone_learner():
+    # a constant guess on four balanced classes is no better than chance: AdaBoost refuses it
+    x = np.arange(40.0)[:, None]
+    y = np.repeat([0, 1, 2, 3], 10)
+    model = Boosted(estimator=DummyClassifier(strategy="most_frequent")).fit(x, y)
+    assert isinstance(model.model_, DummyClassifier)
+    assert model.predict(x).shape == (40,) and model.classes_.tolist() == [0, 1, 2, 3]
 
 
 def _wave(n_reps: int, period: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

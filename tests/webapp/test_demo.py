@@ -8,23 +8,20 @@ from webapp.patients.models import Patient
 
 
 @pytest.mark.django_db
-def test_demo_clinic_loads_once():
+def test_demo_clinic_loads_once(client):
     call_command("load_demo")
-    call_command("load_demo")
+    call_command("load_demo")  # idempotent: nothing created or analysed twice
     assert Clinic.objects.filter(name="Demo clinic").count() == 1
     assert User.objects.filter(username__startswith="demo-").count() == 2
-    assert Patient.objects.count() == 1
+    assert Patient.objects.count() == 2
     exercises = Exercise.objects.all()
     assert exercises.count() == 3
     for exercise in exercises:
         assert exercise.tutor_file.size > 10_000
         assert exercise.tutor_landmark_types[0] == 1
         assert len(exercise.tutor_landmark_frames) == len(exercise.tutor_landmark_types)
-
-
-@pytest.mark.django_db
-def test_demo_passwords_work(client):
-    call_command("load_demo")
+    assert_analysed_recordings_and_models()
+    # The published demo passwords work (one load is slow enough: the same test checks them).
     assert client.login(username="demo-therapist", password="demo-therapist-pw")
     assert client.login(username="demo-patient", password="demo-patient-pw")
 
@@ -35,3 +32,18 @@ def test_demo_refused_in_production(settings):
     with pytest.raises(CommandError):
         call_command("load_demo")
     assert not User.objects.filter(username="demo-therapist").exists()
+
+
+def assert_analysed_recordings_and_models():
+    from webapp.recordings.models import AnalysisRun, Recording
+
+    for exercise in Exercise.objects.all():
+        assert exercise.active_model is not None and exercise.active_model.version == 1
+    assert Recording.objects.count() == 6
+    runs = AnalysisRun.objects.all()
+    assert runs.count() == 6
+    assert {run.status for run in runs} == {"succeeded"}
+    assert all(run.summary["repetitions"] for run in runs)
+    for patient in Patient.objects.all():
+        assert patient.recordings.count() >= 2 and patient.last_activity_at is not None
+        assert patient.prescriptions.exists() and patient.levels.exists()

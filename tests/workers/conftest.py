@@ -40,10 +40,13 @@ def test_database_url() -> str:
 
 
 class Worker:
-    def __init__(self, queue: str, media_root: Path, log_path: Path) -> None:
+    def __init__(
+        self, queue: str, media_root: Path, log_path: Path, extra_env: dict[str, str] | None = None
+    ) -> None:
         self.queue = queue
         self.media_root = media_root
         self.log_path = log_path
+        self.extra_env = extra_env or {}
         self.process: subprocess.Popen[bytes] | None = None
 
     def env(self) -> dict[str, str]:
@@ -52,6 +55,7 @@ class Worker:
             "DATABASE_URL": test_database_url(),
             "MEDIA_ROOT": str(self.media_root),
             "CELERY_QUEUE": self.queue,
+            **self.extra_env,
         }
 
     def start(self) -> None:

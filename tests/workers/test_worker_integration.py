@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import pytest
@@ -34,6 +35,10 @@ def test_worker_process_inspects_a_recording(worker):
     recording.refresh_from_db()
     assert recording.n_frames == 73
     assert recording.fps == pytest.approx(30.0, rel=1e-3)
+    # The result reaches us through Redis before the worker's log line is flushed: wait for it.
+    deadline = time.monotonic() + 10
+    while "succeeded" not in worker.log() and time.monotonic() < deadline:
+        time.sleep(0.1)
     assert "inspect_recording[" in worker.log() and "succeeded" in worker.log()
 
 

@@ -10,21 +10,42 @@ from webapp.recordings.models import AnalysisRun, Recording
 class PatientSerializer(serializers.ModelSerializer):
     class Meta:
         model = Patient
-        fields = ["id", "display_name", "date_of_birth", "created_at", "archived_at", "last_activity_at"]
+        fields = [
+            "id",
+            "display_name",
+            "date_of_birth",
+            "created_at",
+            "archived_at",
+            "last_activity_at",
+        ]
 
 
 class ExerciseSerializer(serializers.ModelSerializer):
     class Meta:
         model = Exercise
-        fields = ["id", "name", "description", "involved_joints", "landmark_type_names", "created_at"]
+        fields = [
+            "id",
+            "name",
+            "description",
+            "involved_joints",
+            "landmark_type_names",
+            "created_at",
+        ]
 
 
 class RunSerializer(serializers.ModelSerializer):
     class Meta:
         model = AnalysisRun
         fields = [
-            "id", "status", "stage", "progress", "created_at", "started_at", "finished_at",
-            "user_error", "code_version",
+            "id",
+            "status",
+            "stage",
+            "progress",
+            "created_at",
+            "started_at",
+            "finished_at",
+            "user_error",
+            "code_version",
         ]
 
 
@@ -37,8 +58,23 @@ class RecordingSerializer(serializers.ModelSerializer):
     class Meta:
         model = Recording
         fields = [
-            "id", "patient", "exercise", "original_name", "checksum", "n_frames", "fps",
-            "duration_s", "pain_score", "note", "uploaded_at", "status", "progress", "result", "run",
+            "id",
+            "patient",
+            "exercise",
+            "original_name",
+            "checksum",
+            "n_frames",
+            "fps",
+            "duration_s",
+            "pain_score",
+            "note",
+            "uploaded_at",
+            "status",
+            "progress",
+            "result",
+            "run",
+            "suggested_exercise",
+            "suggestion_distance",
         ]
 
     def latest_run(self, recording: Recording) -> AnalysisRun | None:
@@ -66,5 +102,11 @@ class RecordingUploadSerializer(serializers.Serializer):
     patient = serializers.UUIDField()
     exercise = serializers.UUIDField(required=False, allow_null=True)
     file = serializers.FileField()
-    pain_score = serializers.IntegerField(min_value=0, max_value=10, required=False, allow_null=True)
+    pain_score = serializers.IntegerField(
+        min_value=0, max_value=10, required=False, allow_null=True
+    )
     note = serializers.CharField(required=False, allow_blank=True, max_length=2000)
+
+
+class ConfirmSerializer(serializers.Serializer):
+    exercise = serializers.UUIDField()

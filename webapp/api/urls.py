@@ -15,11 +15,33 @@ urlpatterns = [
         name="api-patient-recordings",
     ),
     path(
-        "v1/patients/<uuid:pk>/progress/", views.PatientProgress.as_view(), name="api-patient-progress"
+        "v1/patients/<uuid:pk>/progress/",
+        views.PatientProgress.as_view(),
+        name="api-patient-progress",
+    ),
+    path(
+        "v1/patients/<uuid:pk>/prescriptions/",
+        views.PatientPrescriptions.as_view(),
+        name="api-patient-prescriptions",
     ),
     path("v1/exercises/", views.ExerciseList.as_view(), name="api-exercises"),
     path("v1/recordings/", views.RecordingCreate.as_view(), name="api-recordings"),
     path("v1/recordings/<uuid:pk>/", views.RecordingDetail.as_view(), name="api-recording"),
+    path(
+        "v1/recordings/<uuid:pk>/result/",
+        views.RecordingResult.as_view(),
+        name="api-recording-result",
+    ),
+    path(
+        "v1/recordings/<uuid:pk>/corrections/",
+        views.RecordingCorrections.as_view(),
+        name="api-recording-corrections",
+    ),
+    path(
+        "v1/recordings/<uuid:pk>/confirm/",
+        views.RecordingConfirm.as_view(),
+        name="api-recording-confirm",
+    ),
     # The schema describes clinical endpoints: only signed-in users and token holders read it.
     path(
         "schema/",

@@ -1,29 +1,38 @@
 from __future__ import annotations
 
+from django.core.exceptions import ValidationError as DjangoValidationError
+from django.http import Http404
 from django.utils.dateparse import parse_date
 from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import generics, status
-from rest_framework.exceptions import ValidationError
+from rest_framework.exceptions import PermissionDenied, ValidationError
 from rest_framework.parsers import FormParser, MultiPartParser
 from rest_framework.request import Request
 from rest_framework.response import Response
 from rest_framework.views import APIView
 
+from analysis.bvh import read
 from webapp.accounts.permissions import (
+    get_exercise_for_user,
     get_patient_for_user,
     get_recording_for_user,
     visible_exercises,
     visible_patients,
 )
 from webapp.api.serializers import (
+    ConfirmSerializer,
     ExerciseSerializer,
     PatientSerializer,
     RecordingSerializer,
     RecordingUploadSerializer,
 )
+from webapp.patients.adherence import adherence
 from webapp.patients.progress import patient_progress
+from webapp.recordings import services
+from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import UploadForm
-from webapp.recordings.uploads import store_recording
+from webapp.recordings.results import result_data
+from webapp.recordings.uploads import check_skeleton, store_recording, suggest_exercise
 
 DATE_FILTERS = [
     OpenApiParameter("since", str, description="ISO date: only on or after this day"),
@@ -101,15 +110,22 @@ class RecordingCreate(APIView):
         RecordingUploadSerializer(data=request.data).is_valid(raise_exception=True)
         get_patient_for_user(request, request.data.get("patient"))
         form = UploadForm(
-            request.data, request.FILES,
-            patients=visible_patients(request.user), exercises=visible_exercises(request.user),
+            request.data,
+            request.FILES,
+            patients=visible_patients(request.user),
+            exercises=visible_exercises(request.user),
         )
         if not form.is_valid():
             return Response(form.errors.get_json_data(), status=status.HTTP_400_BAD_REQUEST)
         data = form.cleaned_data
         recording, _ = store_recording(
-            form.parsed, patient=data["patient"], exercise=data["exercise"], user=request.user,
-            pain_score=data["pain_score"], note=data["note"],
+            form.parsed,
+            patient=data["patient"],
+            exercise=data["exercise"],
+            user=request.user,
+            pain_score=data["pain_score"],
+            note=data["note"],
+            suggestion=suggest_exercise(form.parsed, data["exercise"], data["patient"]),
         )
         body = RecordingSerializer(recording).data
         return Response(body, status=status.HTTP_201_CREATED)
@@ -120,3 +136,86 @@ class RecordingDetail(generics.RetrieveAPIView):
 
     def get_object(self):
         return get_recording_for_user(self.request, self.kwargs["pk"])
+
+
+class RecordingResult(APIView):
+    """Results data: repetitions, assessment, feedback, metrics, γ, similar earlier recordings."""
+
+    @extend_schema(responses={200: dict})
+    def get(self, request: Request, pk) -> Response:
+        recording = get_recording_for_user(request, pk)
+        return Response(result_data(recording, recording.runs.first(), request.user))
+
+
+class RecordingConfirm(APIView):
+    """Confirm the exercise of a recording uploaded without one; starts its analysis."""
+
+    @extend_schema(request=ConfirmSerializer, responses={200: RecordingSerializer})
+    def post(self, request: Request, pk) -> Response:
+        recording = get_recording_for_user(request, pk)
+        data = ConfirmSerializer(data=request.data)
+        data.is_valid(raise_exception=True)
+        if recording.exercise_id is not None:
+            raise ValidationError({"exercise": "This recording's exercise is already set."})
+        try:
+            exercise = get_exercise_for_user(request, data.validated_data["exercise"])
+        except Http404 as error:
+            raise ValidationError({"exercise": "Unknown exercise."}) from error
+        with recording.file.open("rb") as handle:
+            try:
+                check_skeleton(read(handle.read()), exercise)
+            except DjangoValidationError as error:
+                raise ValidationError({"exercise": error.messages}) from error
+        services.confirm_exercise(recording, exercise)
+        recording.refresh_from_db()
+        return Response(RecordingSerializer(recording).data)
+
+
+class PatientPrescriptions(APIView):
+    """A patient's prescriptions with adherence (sessions done versus prescribed)."""
+
+    @extend_schema(responses={200: dict})
+    def get(self, request: Request, pk) -> Response:
+        patient = get_patient_for_user(request, pk)
+        rows = [
+            {
+                "id": str(p.pk),
+                "exercise": str(p.exercise_id),
+                "exercise_name": p.exercise.name,
+                "sessions_per_week": p.sessions_per_week,
+                "target_repetitions": p.target_repetitions,
+                "start_date": p.start_date.isoformat(),
+                "end_date": p.end_date.isoformat() if p.end_date else None,
+                "adherence": adherence(p).to_json(),
+            }
+            for p in patient.prescriptions.select_related("exercise")
+        ]
+        return Response({"patient": str(patient.pk), "prescriptions": rows})
+
+
+class RecordingCorrections(APIView):
+    """Therapist corrections (landmarks, per-joint levels, pass/fail per repetition) of the latest
+    analysis; they become training data for the next model and the pass/fail threshold."""
+
+    def latest(self, request: Request, pk):
+        if not request.user.is_staff_member:
+            get_recording_for_user(request, pk, audit=False)  # 404 before 403 for strangers
+            raise PermissionDenied("Only the clinic's therapists correct analyses.")
+        recording = get_recording_for_user(request, pk)
+        return recording.runs.filter(status="succeeded").first()
+
+    @extend_schema(responses={200: dict})
+    def get(self, request: Request, pk) -> Response:
+        run = self.latest(request, pk)
+        return Response(corrections_of(run) if run else {"run": None})
+
+    @extend_schema(request=dict, responses={200: dict})
+    def post(self, request: Request, pk) -> Response:
+        run = self.latest(request, pk)
+        if run is None:
+            raise ValidationError({"detail": "The recording has no finished analysis."})
+        try:
+            saved = apply_corrections(run, request.data, request.user)
+        except DjangoValidationError as error:
+            raise ValidationError(error.message_dict) from error
+        return Response({"saved": saved, **corrections_of(run)})

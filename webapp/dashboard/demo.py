@@ -1,4 +1,5 @@
-"""The demo clinic: a therapist, a patient and three exercises with UI-PRMD tutors.
+"""The demo clinic: a therapist, two patients (one with an account), three exercises with UI-PRMD
+tutors and built models, and a few analysed UI-PRMD recordings per patient.
 
 Idempotent: loading twice keeps existing rows and never duplicates them.
 """
@@ -15,6 +16,7 @@ from django.core.files.base import ContentFile
 from django.db import transaction
 
 from webapp.accounts.models import Clinic, Role, User
+from webapp.dashboard.demo_recordings import DemoRecording, load_recordings
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 
@@ -36,6 +38,19 @@ DEMO_EXERCISES = (
     DemoExercise(
         "m07", "Shoulder abduction", "Raise the arm sideways to shoulder height and lower it."
     ),
+)
+
+
+# Other subjects than the tutors' (s01), so the demo compares two people, as a clinic would.
+PAT_RECORDINGS = (
+    DemoRecording("Deep squat", "sessions/m01_s02_incorrect.bvh.gz", 20, pain_score=4),
+    DemoRecording("Deep squat", "sessions/m01_s03_incorrect.bvh.gz", 12, pain_score=3),
+    DemoRecording("Deep squat", "sessions/m01_s02_correct.bvh.gz", 3, pain_score=1),
+    DemoRecording("Shoulder abduction", "sessions/m07_s02_correct.bvh.gz", 5),
+)
+ROBIN_RECORDINGS = (
+    DemoRecording("Sit to stand", "sessions/m05_s03_incorrect.bvh.gz", 15, pain_score=5),
+    DemoRecording("Sit to stand", "sessions/m05_s03_correct.bvh.gz", 2, pain_score=2),
 )
 
 
@@ -96,6 +111,11 @@ def load_demo_clinic() -> Clinic:
         clinic=clinic, user=patient_user, defaults={"display_name": "Pat Patient"}
     )
     patient.therapists.add(therapist)
-    for spec in DEMO_EXERCISES:
-        ensure_exercise(clinic, spec)
+    second, _ = Patient.objects.get_or_create(
+        clinic=clinic, display_name="Robin Second", defaults={"notes": "Knee rehabilitation."}
+    )
+    second.therapists.add(therapist)
+    exercises = {spec.name: ensure_exercise(clinic, spec) for spec in DEMO_EXERCISES}
+    plan = {patient: PAT_RECORDINGS, second: ROBIN_RECORDINGS}
+    load_recordings(UI_PRMD, plan, exercises, therapist)
     return clinic

@@ -59,7 +59,11 @@ def validate_landmarks(frames: list[int], types: list[int], parsed: ParsedUpload
         raise ValidationError("Give one key-pose type for every key-pose frame.")
     if frames != sorted(frames):
         raise ValidationError("Key-pose frames must be in time order.")
-    if parsed is not None and frames and (frames[0] < 0 or frames[-1] >= parsed.motion.frames.shape[0]):
+    if (
+        parsed is not None
+        and frames
+        and (frames[0] < 0 or frames[-1] >= parsed.motion.frames.shape[0])
+    ):
         raise ValidationError(
             f"Key-pose frames must lie between 0 and {parsed.motion.frames.shape[0] - 1}."
         )
@@ -90,6 +94,8 @@ class LandmarksForm(forms.Form):
         cleaned["frames_list"] = [frames[i] for i in order]
         cleaned["types_list"] = [types[i] for i in order] if len(types) == len(frames) else types
         validate_landmarks(cleaned["frames_list"], cleaned["types_list"], None)
+        if len(frames) < 2 or 1 not in types:
+            raise ValidationError("Mark at least two key poses, including type 1 (start).")
         joints = cleaned.get("involved_joints") or []
         unknown = sorted(set(joints) - set(self.joint_names))
         if unknown:

@@ -30,6 +30,9 @@ class Exercise(models.Model):
         blank=True,
         related_name="+",
     )
+    # Paper 001's pass/fail score threshold, refitted by Celery beat from therapist labels.
+    pass_threshold = models.FloatField(null=True, blank=True)
+    threshold_report = models.JSONField(default=dict, blank=True)
     created_at = models.DateTimeField(auto_now_add=True)
     archived_at = models.DateTimeField(null=True, blank=True)
 

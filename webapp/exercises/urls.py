@@ -1,6 +1,6 @@
 from django.urls import path
 
-from webapp.exercises import views
+from webapp.exercises import annotate, views
 
 app_name = "exercises"
 
@@ -10,4 +10,7 @@ urlpatterns = [
     path("<uuid:pk>/", views.exercise_detail, name="detail"),
     path("<uuid:pk>/build/", views.build_model, name="build"),
     path("<uuid:pk>/models.json", views.model_status, name="model-status"),
+    path("<uuid:pk>/tutor.json", annotate.tutor_data, name="tutor-data"),
+    path("<uuid:pk>/landmarks/", annotate.save_landmarks, name="landmarks"),
+    path("<uuid:pk>/grammar/", annotate.check_grammar, name="grammar"),
 ]

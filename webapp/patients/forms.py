@@ -17,7 +17,12 @@ class PrescriptionForm(forms.ModelForm):
     class Meta:
         model = Prescription
         fields = [
-            "exercise", "sessions_per_week", "target_repetitions", "start_date", "end_date", "notes",
+            "exercise",
+            "sessions_per_week",
+            "target_repetitions",
+            "start_date",
+            "end_date",
+            "notes",
         ]
         widgets = {
             "start_date": forms.DateInput(attrs={"type": "date"}),

@@ -6,6 +6,7 @@ import csv
 
 from django.contrib.auth.decorators import login_required
 from django.http import HttpRequest, HttpResponse, JsonResponse
+from django.utils.dateparse import parse_date
 from django.utils.text import slugify
 
 from webapp.accounts.permissions import get_patient_for_user
@@ -18,8 +19,24 @@ CSV_COLUMNS = ["date", "exercise_name", "score", "repetitions", "pain_score", "r
 @login_required
 def progress_json(request: HttpRequest, pk) -> JsonResponse:
     patient = get_patient_for_user(request, pk)
-    points = patient_progress(patient, exercise_id=request.GET.get("exercise") or None)
+    try:
+        since, until = date_arg(request, "since"), date_arg(request, "until")
+    except ValueError as error:
+        return JsonResponse({"detail": str(error)}, status=400)
+    points = patient_progress(
+        patient, exercise_id=request.GET.get("exercise") or None, since=since, until=until
+    )
     return JsonResponse({"patient": str(patient.pk), "points": points})
+
+
+def date_arg(request: HttpRequest, name: str):
+    raw = request.GET.get(name)
+    if not raw:
+        return None
+    value = parse_date(raw) if len(raw) == 10 else None
+    if value is None:
+        raise ValueError(f"{name}: '{raw}' is not a date (use YYYY-MM-DD).")
+    return value
 
 
 @login_required

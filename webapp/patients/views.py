@@ -10,6 +10,7 @@ from django.utils import timezone
 from django.views.decorators.http import require_POST
 
 from webapp.accounts.permissions import get_patient_for_user, require_staff, visible_patients
+from webapp.patients.adherence import adherence
 from webapp.patients.forms import PatientForm, PrescriptionForm
 from webapp.patients.models import Patient
 
@@ -30,12 +31,19 @@ def patient_list(request: HttpRequest) -> HttpResponse:
     return render(request, "patients/list.html", context)
 
 
+def with_adherence(patient: Patient) -> list:
+    prescriptions = list(patient.prescriptions.select_related("exercise"))
+    for prescription in prescriptions:
+        prescription.adherence = adherence(prescription)
+    return prescriptions
+
+
 @login_required
 def patient_detail(request: HttpRequest, pk) -> HttpResponse:
     patient = get_patient_for_user(request, pk)
     context = {
         "patient": patient,
-        "prescriptions": patient.prescriptions.select_related("exercise"),
+        "prescriptions": with_adherence(patient),
         "recordings": patient.recordings.select_related("exercise").prefetch_related("runs")[:50],
         "levels": patient.levels.select_related("exercise").order_by("exercise__name", "joint"),
     }

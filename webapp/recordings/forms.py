@@ -5,7 +5,12 @@ from django.core.exceptions import ValidationError
 
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
-from webapp.recordings.uploads import ParsedUpload, check_not_duplicate, check_skeleton, parse_upload
+from webapp.recordings.uploads import (
+    ParsedUpload,
+    check_not_duplicate,
+    check_skeleton,
+    parse_upload,
+)
 
 
 class UploadForm(forms.Form):
@@ -21,7 +26,9 @@ class UploadForm(forms.Form):
     pain_score = forms.IntegerField(
         min_value=0, max_value=10, required=False, label="Pain (0 = none, 10 = worst)"
     )
-    note = forms.CharField(widget=forms.Textarea(attrs={"rows": 3}), required=False, max_length=2000)
+    note = forms.CharField(
+        widget=forms.Textarea(attrs={"rows": 3}), required=False, max_length=2000
+    )
 
     def __init__(self, *args, patients, exercises, **kwargs):
         super().__init__(*args, **kwargs)

@@ -42,6 +42,11 @@ class Recording(models.Model):
         settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True, related_name="+"
     )
     uploaded_at = models.DateTimeField(auto_now_add=True, db_index=True)
+    # Set when uploaded without an exercise: paper 002's guess, until someone confirms it.
+    suggested_exercise = models.ForeignKey(
+        "exercises.Exercise", on_delete=models.SET_NULL, null=True, blank=True, related_name="+"
+    )
+    suggestion_distance = models.FloatField(null=True, blank=True)
 
     class Meta:
         ordering = ["-uploaded_at"]
@@ -110,3 +115,18 @@ class AssessmentCorrection(models.Model):
     used_in_model = models.ForeignKey(
         "exercises.ExerciseModel", on_delete=models.SET_NULL, null=True, blank=True
     )
+
+
+class RepetitionLabel(models.Model):
+    """A therapist's pass/fail verdict on one repetition of a run: data for the 001 threshold."""
+
+    run = models.ForeignKey(AnalysisRun, on_delete=models.CASCADE, related_name="repetition_labels")
+    index = models.PositiveIntegerField()  # position in the run's summary["repetitions"]
+    passed = models.BooleanField()
+    author = models.ForeignKey(settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True)
+    created_at = models.DateTimeField(auto_now_add=True)
+
+    class Meta:
+        constraints = [
+            models.UniqueConstraint(fields=["run", "index"], name="one_label_per_repetition")
+        ]

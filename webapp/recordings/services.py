@@ -15,3 +15,15 @@ def start_analysis(recording: Recording) -> AnalysisRun:
     run_id = str(run.pk)
     transaction.on_commit(lambda: analyse_recording.delay(run_id))
     return run
+
+
+def confirm_exercise(recording: Recording, exercise) -> AnalysisRun | None:
+    """Set the exercise of a recording uploaded without one and start its analysis, once."""
+    with transaction.atomic():
+        updated = Recording.objects.filter(pk=recording.pk, exercise__isnull=True).update(
+            exercise=exercise
+        )
+        if updated != 1:
+            return None
+        recording.exercise = exercise
+        return start_analysis(recording)

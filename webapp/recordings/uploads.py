@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import gzip
 import hashlib
+import logging
 from dataclasses import dataclass
 
 from django.conf import settings
@@ -15,15 +16,18 @@ from django.core.exceptions import ValidationError
 from django.core.files.base import ContentFile
 from django.core.files.uploadedfile import UploadedFile
 from django.db import transaction
+from django.db.models import Q
 from django.utils import timezone
 
 from analysis.bvh import BVHError, Motion, read
+from analysis.errors import AnalysisInputError
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings import services
 from webapp.recordings.models import AnalysisRun, Recording
 
+log = logging.getLogger(__name__)
 MIN_FRAMES = 10
 ACCEPTED_SUFFIXES = (".bvh", ".bvh.gz")
 
@@ -83,7 +87,6 @@ def check_not_duplicate(patient: Patient, checksum: str) -> None:
         raise ValidationError(f"This file was already uploaded for this patient on {when}.")
 
 
-@transaction.atomic
 def store_recording(
     parsed: ParsedUpload,
     *,
@@ -92,18 +95,68 @@ def store_recording(
     user: User,
     pain_score: int | None = None,
     note: str = "",
+    suggestion=None,
 ) -> tuple[Recording, AnalysisRun | None]:
-    motion = parsed.motion
-    recording = Recording(
-        clinic=patient.clinic, patient=patient, exercise=exercise, checksum=parsed.checksum,
-        original_name=parsed.original_name[:255], size_bytes=len(parsed.content),
-        n_frames=motion.frames.shape[0], n_joints=len(motion.skeleton.names),
-        fps=1.0 / motion.frame_time, duration_s=motion.frames.shape[0] * motion.frame_time,
-        pain_score=pain_score, note=note, uploaded_by=user,
+    """Store the recording, its file and its first run in one transaction.
+
+    The file is written before the row commits; if the transaction fails it is deleted again, so a
+    failed upload leaves no orphan file behind.
+    """
+    recording = new_recording(
+        parsed, patient=patient, exercise=exercise, user=user, pain_score=pain_score, note=note
     )
+    if suggestion is not None:
+        recording.suggested_exercise = suggestion.exercise
+        recording.suggestion_distance = suggestion.distance
     suffix = ".bvh.gz" if parsed.content[:2] == b"\x1f\x8b" else ".bvh"
-    recording.file.save(f"{recording.pk}{suffix}", ContentFile(parsed.content), save=False)
-    recording.save()
-    Patient.objects.filter(pk=patient.pk).update(last_activity_at=timezone.now())
-    run = services.start_analysis(recording) if exercise is not None else None
+    try:
+        with transaction.atomic():
+            recording.file.save(f"{recording.pk}{suffix}", ContentFile(parsed.content), save=False)
+            recording.save()
+            Patient.objects.filter(pk=patient.pk).update(last_activity_at=timezone.now())
+            run = services.start_analysis(recording) if exercise is not None else None
+    except Exception:
+        if recording.file.name:
+            recording.file.storage.delete(recording.file.name)
+        raise
     return recording, run
+
+
+def new_recording(parsed: ParsedUpload, *, patient, exercise, user, pain_score, note) -> Recording:
+    motion = parsed.motion
+    return Recording(
+        clinic=patient.clinic,
+        patient=patient,
+        exercise=exercise,
+        checksum=parsed.checksum,
+        original_name=parsed.original_name[:255],
+        size_bytes=len(parsed.content),
+        n_frames=motion.frames.shape[0],
+        n_joints=len(motion.skeleton.names),
+        fps=1.0 / motion.frame_time,
+        duration_s=motion.frames.shape[0] * motion.frame_time,
+        pain_score=pain_score,
+        note=note,
+        uploaded_by=user,
+    )
+
+
+def suggest_exercise(parsed: ParsedUpload, exercise: Exercise | None, patient: Patient):
+    """Paper 002's guess of the exercise when the upload names none (None when it does)."""
+    from webapp.recordings.similar import identify_exercise
+
+    if exercise is not None:
+        return None
+    candidates = Exercise.objects.filter(clinic_id=patient.clinic_id)
+    today = timezone.localdate()
+    prescribed = candidates.filter(
+        Q(prescriptions__end_date__isnull=True) | Q(prescriptions__end_date__gte=today),
+        prescriptions__patient=patient,
+    ).distinct()
+    # A patient's prescriptions are the likeliest answers; fall back to the whole clinic.
+    try:
+        return identify_exercise(parsed.motion, prescribed if prescribed.exists() else candidates)
+    except (AnalysisInputError, ValueError):
+        # An unusual rig (no feet, say) cannot be recognised; the uploader then chooses.
+        log.info("could not recognise the exercise of an upload", exc_info=True)
+        return None

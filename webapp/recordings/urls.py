@@ -9,4 +9,7 @@ urlpatterns = [
     path("<uuid:pk>/", views.detail, name="detail"),
     path("<uuid:pk>/status/", views.status, name="status"),
     path("<uuid:pk>/rerun/", views.rerun, name="rerun"),
+    path("<uuid:pk>/result.json", views.result, name="result"),
+    path("<uuid:pk>/confirm/", views.confirm, name="confirm"),
+    path("<uuid:pk>/corrections/", views.corrections, name="corrections"),
 ]

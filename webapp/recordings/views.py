@@ -1,12 +1,17 @@
 from __future__ import annotations
 
+import json
+
+from django import forms
 from django.contrib import messages
 from django.contrib.auth.decorators import login_required
+from django.core.exceptions import ValidationError
 from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import redirect, render
 from django.views.decorators.cache import never_cache
 from django.views.decorators.http import require_POST
 
+from analysis.bvh import read
 from webapp.accounts.permissions import (
     get_recording_for_user,
     require_staff,
@@ -14,9 +19,11 @@ from webapp.accounts.permissions import (
     visible_patients,
 )
 from webapp.recordings import services
+from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import UploadForm
 from webapp.recordings.models import AnalysisRun
-from webapp.recordings.uploads import store_recording
+from webapp.recordings.results import result_data
+from webapp.recordings.uploads import check_skeleton, store_recording, suggest_exercise
 
 
 def upload_form(request: HttpRequest) -> UploadForm:
@@ -34,9 +41,17 @@ def upload(request: HttpRequest) -> HttpResponse:
     if request.method == "POST" and form.is_valid():
         data = form.cleaned_data
         recording, _ = store_recording(
-            form.parsed, patient=data["patient"], exercise=data["exercise"], user=request.user,
-            pain_score=data["pain_score"], note=data["note"],
+            form.parsed,
+            patient=data["patient"],
+            exercise=data["exercise"],
+            user=request.user,
+            pain_score=data["pain_score"],
+            note=data["note"],
+            suggestion=suggest_exercise(form.parsed, data["exercise"], data["patient"]),
         )
+        if recording.exercise_id is None:
+            messages.info(request, "Recording uploaded. Please confirm which exercise it is.")
+            return redirect("recordings:confirm", pk=recording.pk)
         messages.success(request, "Recording uploaded; the analysis has started.")
         return redirect("recordings:detail", pk=recording.pk)
     status = 400 if request.method == "POST" else 200
@@ -81,3 +96,70 @@ def rerun(request: HttpRequest, pk) -> HttpResponse:
         services.start_analysis(recording)
         messages.success(request, "A new analysis has started; earlier results are kept.")
     return redirect("recordings:detail", pk=recording.pk)
+
+
+@never_cache
+@login_required
+def result(request: HttpRequest, pk) -> JsonResponse:
+    """Everything the results page shows, as JSON (charts and viewer read it)."""
+    recording = get_recording_for_user(request, pk)
+    return JsonResponse(result_data(recording, recording.runs.first(), request.user))
+
+
+class ConfirmForm(forms.Form):
+    exercise = forms.ModelChoiceField(queryset=None, empty_label=None)
+
+    def __init__(self, *args, recording, exercises, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.recording = recording
+        self.fields["exercise"].queryset = exercises
+
+    def clean_exercise(self):
+        exercise = self.cleaned_data["exercise"]
+        with self.recording.file.open("rb") as handle:
+            check_skeleton(read(handle.read()), exercise)
+        return exercise
+
+
+@login_required
+def confirm(request: HttpRequest, pk) -> HttpResponse:
+    """Confirm (or correct) the exercise the system recognised, then analyse the recording."""
+    recording = get_recording_for_user(request, pk)
+    if recording.exercise_id is not None:
+        return redirect("recordings:detail", pk=recording.pk)
+    exercises = visible_exercises(request.user).filter(archived_at__isnull=True)
+    initial = {"exercise": recording.suggested_exercise_id}
+    form = ConfirmForm(
+        request.POST or None, initial=initial, recording=recording, exercises=exercises
+    )
+    if request.method == "POST" and form.is_valid():
+        services.confirm_exercise(recording, form.cleaned_data["exercise"])
+        messages.success(request, "Thank you; the analysis has started.")
+        return redirect("recordings:detail", pk=recording.pk)
+    status = 400 if request.method == "POST" else 200
+    context = {"recording": recording, "form": form}
+    return render(request, "recordings/confirm.html", context, status=status)
+
+
+def succeeded_run(recording) -> AnalysisRun | None:
+    return recording.runs.filter(status="succeeded").first()
+
+
+@never_cache
+@login_required
+@require_staff
+def corrections(request: HttpRequest, pk) -> JsonResponse:
+    """GET the therapist corrections of the latest analysis; POST (JSON) adds corrections."""
+    recording = get_recording_for_user(request, pk)
+    run = succeeded_run(recording)
+    if request.method == "POST":
+        if run is None:
+            return JsonResponse({"detail": "The recording has no finished analysis."}, status=400)
+        try:
+            saved = apply_corrections(run, json.loads(request.body or b"null"), request.user)
+        except json.JSONDecodeError:
+            return JsonResponse({"detail": "The body is not JSON."}, status=400)
+        except ValidationError as error:
+            return JsonResponse(error.message_dict, status=400)
+        return JsonResponse({"saved": saved, **corrections_of(run)})
+    return JsonResponse(corrections_of(run) if run else {"run": None})

@@ -6,65 +6,110 @@ from django.db import migrations, models
 
 
 class Migration(migrations.Migration):
-
     initial = True
 
     dependencies = [
-        ('accounts', '0001_initial'),
+        ("accounts", "0001_initial"),
     ]
 
     operations = [
         migrations.CreateModel(
-            name='Exercise',
+            name="Exercise",
             fields=[
-                ('id', models.UUIDField(default=uuid.uuid4, editable=False, primary_key=True, serialize=False)),
-                ('name', models.CharField(max_length=200)),
-                ('description', models.TextField(blank=True)),
-                ('tutor_file', models.FileField(upload_to='tutors/')),
-                ('tutor_checksum', models.CharField(blank=True, max_length=64)),
-                ('tutor_landmark_frames', models.JSONField(blank=True, default=list)),
-                ('tutor_landmark_types', models.JSONField(blank=True, default=list)),
-                ('landmark_type_names', models.JSONField(blank=True, default=dict)),
-                ('involved_joints', models.JSONField(blank=True, default=list)),
-                ('feedback_grammar', models.TextField(blank=True)),
-                ('created_at', models.DateTimeField(auto_now_add=True)),
-                ('archived_at', models.DateTimeField(blank=True, null=True)),
-                ('clinic', models.ForeignKey(on_delete=django.db.models.deletion.PROTECT, related_name='exercises', to='accounts.clinic')),
+                (
+                    "id",
+                    models.UUIDField(
+                        default=uuid.uuid4, editable=False, primary_key=True, serialize=False
+                    ),
+                ),
+                ("name", models.CharField(max_length=200)),
+                ("description", models.TextField(blank=True)),
+                ("tutor_file", models.FileField(upload_to="tutors/")),
+                ("tutor_checksum", models.CharField(blank=True, max_length=64)),
+                ("tutor_landmark_frames", models.JSONField(blank=True, default=list)),
+                ("tutor_landmark_types", models.JSONField(blank=True, default=list)),
+                ("landmark_type_names", models.JSONField(blank=True, default=dict)),
+                ("involved_joints", models.JSONField(blank=True, default=list)),
+                ("feedback_grammar", models.TextField(blank=True)),
+                ("created_at", models.DateTimeField(auto_now_add=True)),
+                ("archived_at", models.DateTimeField(blank=True, null=True)),
+                (
+                    "clinic",
+                    models.ForeignKey(
+                        on_delete=django.db.models.deletion.PROTECT,
+                        related_name="exercises",
+                        to="accounts.clinic",
+                    ),
+                ),
             ],
             options={
-                'ordering': ['name'],
+                "ordering": ["name"],
             },
         ),
         migrations.CreateModel(
-            name='ExerciseModel',
+            name="ExerciseModel",
             fields=[
-                ('id', models.UUIDField(default=uuid.uuid4, editable=False, primary_key=True, serialize=False)),
-                ('version', models.PositiveIntegerField()),
-                ('status', models.CharField(choices=[('queued', 'Queued'), ('running', 'Building'), ('ready', 'Ready'), ('failed', 'Failed')], default='queued', max_length=10)),
-                ('progress', models.PositiveSmallIntegerField(default=0)),
-                ('artefact', models.FileField(blank=True, upload_to='models/')),
-                ('training_report', models.JSONField(blank=True, default=dict)),
-                ('code_version', models.CharField(blank=True, max_length=40)),
-                ('error', models.TextField(blank=True)),
-                ('created_at', models.DateTimeField(auto_now_add=True)),
-                ('finished_at', models.DateTimeField(blank=True, null=True)),
-                ('exercise', models.ForeignKey(on_delete=django.db.models.deletion.CASCADE, related_name='models', to='exercises.exercise')),
+                (
+                    "id",
+                    models.UUIDField(
+                        default=uuid.uuid4, editable=False, primary_key=True, serialize=False
+                    ),
+                ),
+                ("version", models.PositiveIntegerField()),
+                (
+                    "status",
+                    models.CharField(
+                        choices=[
+                            ("queued", "Queued"),
+                            ("running", "Building"),
+                            ("ready", "Ready"),
+                            ("failed", "Failed"),
+                        ],
+                        default="queued",
+                        max_length=10,
+                    ),
+                ),
+                ("progress", models.PositiveSmallIntegerField(default=0)),
+                ("artefact", models.FileField(blank=True, upload_to="models/")),
+                ("training_report", models.JSONField(blank=True, default=dict)),
+                ("code_version", models.CharField(blank=True, max_length=40)),
+                ("error", models.TextField(blank=True)),
+                ("created_at", models.DateTimeField(auto_now_add=True)),
+                ("finished_at", models.DateTimeField(blank=True, null=True)),
+                (
+                    "exercise",
+                    models.ForeignKey(
+                        on_delete=django.db.models.deletion.CASCADE,
+                        related_name="models",
+                        to="exercises.exercise",
+                    ),
+                ),
             ],
             options={
-                'ordering': ['-version'],
+                "ordering": ["-version"],
             },
         ),
         migrations.AddField(
-            model_name='exercise',
-            name='active_model',
-            field=models.ForeignKey(blank=True, null=True, on_delete=django.db.models.deletion.SET_NULL, related_name='+', to='exercises.exercisemodel'),
+            model_name="exercise",
+            name="active_model",
+            field=models.ForeignKey(
+                blank=True,
+                null=True,
+                on_delete=django.db.models.deletion.SET_NULL,
+                related_name="+",
+                to="exercises.exercisemodel",
+            ),
         ),
         migrations.AddConstraint(
-            model_name='exercisemodel',
-            constraint=models.UniqueConstraint(fields=('exercise', 'version'), name='one_model_version'),
+            model_name="exercisemodel",
+            constraint=models.UniqueConstraint(
+                fields=("exercise", "version"), name="one_model_version"
+            ),
         ),
         migrations.AddConstraint(
-            model_name='exercise',
-            constraint=models.UniqueConstraint(fields=('clinic', 'name'), name='exercise_name_per_clinic'),
+            model_name="exercise",
+            constraint=models.UniqueConstraint(
+                fields=("clinic", "name"), name="exercise_name_per_clinic"
+            ),
         ),
     ]

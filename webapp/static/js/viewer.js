@@ -6,7 +6,10 @@
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 
-const SKELETON_COLOURS = [0x1f6feb, 0x2da44e, 0x8250df, 0xd4772c];
+// Colour per skeleton kind, the same in the toggles, the 3D view and the charts.
+export const SKELETON_COLOURS = {
+  patient: 0x1f6feb, patient_adjusted: 0x2da44e, tutor: 0x8250df, tutor_adjusted: 0xd4772c,
+};
 const LEVEL_COLOURS = [0x2da44e, 0x9cc23f, 0xd29922, 0xcf222e]; // level 1 (as tutor) .. 4
 const NEUTRAL_JOINT = 0xdadfe5;
 
@@ -21,7 +24,7 @@ export class Playback {
     this.playing = false;
     this.speed = 1;
     this.loop = null; // [start, end] of the repetition being looped
-    this.visible = meta.skeletons.map((_, i) => i === 0 || i === 3);
+    this.visible = meta.skeletons.map((s, i) => i === 0 || s.key === "tutor_adjusted");
     this.sideBySide = false;
     this.listeners = [];
     this.rafCount = 0;
@@ -36,12 +39,14 @@ export class Playback {
 
   buildScene() {
     const canvas = this.root.querySelector("canvas");
-    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+    // preserveDrawingBuffer lets tests and snapshots read the canvas; pixel ratio capped for speed.
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 1.5));
     this.scene = new THREE.Scene();
     this.scene.background = new THREE.Color(0xf7f9fb);
     this.camera = new THREE.PerspectiveCamera(45, 1, 1, 10000);
     this.controls = new OrbitControls(this.camera, canvas);
+    this.controls.addEventListener("change", () => { this.dirty = true; });
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8899aa, 2.2));
     const light = new THREE.DirectionalLight(0xffffff, 1.2);
     light.position.set(200, 400, 300);
@@ -83,10 +88,10 @@ export class Playback {
   buildSkeleton(s) {
     const group = new THREE.Group();
     const radius = this.size / 90;
-    const boneMaterial = new THREE.MeshStandardMaterial({ color: SKELETON_COLOURS[s], roughness: 0.6 });
-    const jointMaterial = new THREE.MeshStandardMaterial({ color: 0xffffff, roughness: 0.5 });
-    const bones = new THREE.InstancedMesh(new THREE.CylinderGeometry(radius, radius, 1, 10), boneMaterial, this.nJoints);
-    const joints = new THREE.InstancedMesh(new THREE.SphereGeometry(radius * 1.7, 12, 10), jointMaterial, this.nJoints);
+    const boneMaterial = new THREE.MeshLambertMaterial({ color: SKELETON_COLOURS[this.meta.skeletons[s].key] ?? 0x888888 });
+    const jointMaterial = new THREE.MeshLambertMaterial({ color: 0xffffff });
+    const bones = new THREE.InstancedMesh(new THREE.CylinderGeometry(radius, radius, 1, 8, 1, true), boneMaterial, this.nJoints);
+    const joints = new THREE.InstancedMesh(new THREE.SphereGeometry(radius * 1.7, 10, 8), jointMaterial, this.nJoints);
     for (let j = 0; j < this.nJoints; j++) joints.setColorAt(j, new THREE.Color(NEUTRAL_JOINT));
     group.add(bones, joints);
     this.scene.add(group);
@@ -151,7 +156,7 @@ export class Playback {
     this.frame = Math.max(0, Math.min(this.nFrames - 1, Math.round(frame)));
     this.skeletons.forEach((_, s) => this.poseSkeleton(s));
     this.colourJoints(levelsAt(this.meta, this.frame));
-    this.renderer.render(this.scene, this.camera);
+    this.dirty = true; // drawn once in the next animation frame, however often the frame is set
     this.listeners.forEach((listener) => listener(this.frame));
   }
 
@@ -168,7 +173,10 @@ export class Playback {
       }
     }
     this.controls.update();
-    this.renderer.render(this.scene, this.camera);
+    if (this.dirty) {
+      this.dirty = false;
+      this.renderer.render(this.scene, this.camera);
+    }
     requestAnimationFrame((t) => this.tick(t));
   }
 

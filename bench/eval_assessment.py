@@ -1,0 +1,181 @@
+"""Evaluation of the assessment pipeline on UI-PRMD (subjects as folds).
+
+Per exercise: the tutor is s01's correct session. Cold start: the model is built from the tutor
+alone. Trained: for each test subject, the model is also trained (``--train``) with the labelled
+sessions of the other subjects s02–s07 (leave one subject out). Reports ROC-AUC of the recording
+score and of the per-repetition scores (each repetition labelled as its session) for correct vs
+incorrect sessions, exact repetition counts, the share of true repetition starts found within
+±5 frames, and the naive baseline (plain DTW distance of each repetition, cut at the true
+boundaries, to the tutor's repetitions).
+
+    python -m bench.eval_assessment [--data data/ui-prmd] [--exercises m01,m02] [--no-trained]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from sklearn.metrics import roc_auc_score
+
+from analysis.bvh import Motion, read
+from analysis.model import build_model
+from analysis.model_fit import TrainingRecording
+from analysis.pipeline import analyse
+from analysis.posefeatures import flatten, scaled_positions
+from analysis.scoring import repetition_distance
+
+SUBJECTS = [f"s{k:02d}" for k in range(2, 8)]
+LABELS = ("correct", "incorrect")
+
+
+@dataclass
+class Session:
+    name: str
+    subject: str
+    correct: bool
+    motion: Motion
+    rep_starts: list[int]
+    landmark_frames: list[int]
+    landmark_types: list[int]
+
+
+@dataclass
+class ExerciseResult:
+    recording_scores: list[tuple[float, bool]] = field(default_factory=list)
+    rep_scores: list[tuple[float, bool]] = field(default_factory=list)
+    baseline: list[tuple[float, bool]] = field(default_factory=list)
+    counts_exact: int = 0
+    sessions: int = 0
+    starts_found: int = 0
+    starts_total: int = 0
+    seconds: float = 0.0
+
+
+def load_sessions(data: Path, exercise: str) -> tuple[Session, list[Session]]:
+    with open(data / "labels.csv") as a, open(data / "landmarks.csv") as b:
+        labels = {r["file"]: r for r in csv.DictReader(a)}
+        marks = {r["file"]: r for r in csv.DictReader(b)}
+
+    def session(subject: str, label: str) -> Session:
+        name = f"sessions/{exercise}_{subject}_{label}.bvh.gz"
+        ints = lambda text: [int(v) for v in text.split(";")]  # noqa: E731
+        return Session(
+            name, subject, label == "correct", read(data / name),
+            ints(labels[name]["rep_start_frames"]), ints(marks[name]["frames"]),
+            ints(marks[name]["types"]),
+        )  # fmt: skip
+
+    tutor = session("s01", "correct")
+    return tutor, [session(s, lab) for s in SUBJECTS for lab in LABELS]
+
+
+def training_items(sessions: list[Session], exclude: str) -> list[TrainingRecording]:
+    return [
+        TrainingRecording(
+            s.motion, tuple(s.landmark_frames), tuple(s.landmark_types),
+            "correct" if s.correct else "incorrect",
+        )
+        for s in sessions if s.subject != exclude
+    ]  # fmt: skip
+
+
+def naive_distances(tutor: Session, session: Session) -> list[float]:
+    """Plain DTW distance of each true repetition to the tutor's true repetitions (all joints)."""
+    joints = list(range(len(tutor.motion.skeleton.names)))
+
+    def reps(s: Session) -> list[np.ndarray]:
+        feats = flatten(scaled_positions(s.motion, joints))
+        bounds = [*s.rep_starts, s.motion.n_frames]
+        return [feats[a:b] for a, b in itertools.pairwise(bounds)]
+
+    templates = reps(tutor)
+    return [repetition_distance(r, templates) for r in reps(session)]
+
+
+def evaluate_session(result: ExerciseResult, session: Session, model, tutor: Session) -> None:
+    start = time.perf_counter()
+    summary = analyse(session.motion, model).to_json()
+    result.seconds += time.perf_counter() - start
+    result.sessions += 1
+    found = [r["start"] for r in summary["repetitions"]]
+    result.counts_exact += len(found) == len(session.rep_starts)
+    for truth in session.rep_starts:
+        result.starts_total += 1
+        result.starts_found += bool(found) and min(abs(f - truth) for f in found) <= 5
+    result.recording_scores.append((summary["score"], session.correct))
+    result.rep_scores += [(r["score"], session.correct) for r in summary["repetitions"]]
+
+
+def auc(pairs: list[tuple[float, bool]]) -> float:
+    y = [c for _, c in pairs]
+    return float(roc_auc_score(y, [s for s, _ in pairs])) if len(set(y)) == 2 else float("nan")
+
+
+def run_exercise(data: Path, exercise: str, trained: bool) -> ExerciseResult:
+    tutor, sessions = load_sessions(data, exercise)
+    result = ExerciseResult()
+    cold = build_model(tutor.motion, tutor.landmark_frames, tutor.landmark_types)
+    for subject in SUBJECTS:
+        model = cold
+        if trained:
+            model = build_model(
+                tutor.motion, tutor.landmark_frames, tutor.landmark_types,
+                training=training_items(sessions, subject),
+            )  # fmt: skip
+        for session in (s for s in sessions if s.subject == subject):
+            evaluate_session(result, session, model, tutor)
+            naive = naive_distances(tutor, session)
+            result.baseline.append((-float(np.mean(naive)), session.correct))
+    return result
+
+
+def row(exercise: str, r: ExerciseResult) -> str:
+    return (
+        f"| {exercise} | {auc(r.recording_scores):.3f} | {auc(r.rep_scores):.3f} | "
+        f"{auc(r.baseline):.3f} | {r.counts_exact}/{r.sessions} | "
+        f"{r.starts_found / max(r.starts_total, 1):.3f} | {r.seconds / max(r.sessions, 1):.3f} |"
+    )
+
+
+def table(data: Path, exercises: list[str], trained: bool) -> list[ExerciseResult]:
+    title = "trained (other subjects' labelled sessions)" if trained else "cold start (tutor only)"
+    print(f"\n### {title}\n")
+    print("| exercise | AUC recording | AUC repetition | AUC naive DTW | exact count | "
+          "starts ±5 | s/session |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|")
+    results = []
+    for exercise in exercises:
+        results.append(run_exercise(data, exercise, trained))
+        print(row(exercise, results[-1]), flush=True)
+    rec = np.nanmean([auc(r.recording_scores) for r in results])
+    rep = np.nanmean([auc(r.rep_scores) for r in results])
+    base = np.nanmean([auc(r.baseline) for r in results])
+    exact = sum(r.counts_exact for r in results) / sum(r.sessions for r in results)
+    starts = sum(r.starts_found for r in results) / sum(r.starts_total for r in results)
+    print(f"| **mean** | {rec:.3f} | {rep:.3f} | {base:.3f} | {exact:.3f} | {starts:.3f} | |")
+    return results
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--data", type=Path, default=Path("data/ui-prmd"))
+    parser.add_argument("--exercises", default=",".join(f"m{k:02d}" for k in range(1, 11)))
+    parser.add_argument("--no-trained", action="store_true")
+    parser.add_argument("--no-cold", action="store_true")
+    args = parser.parse_args()
+    exercises = args.exercises.split(",")
+    print(f"UI-PRMD assessment evaluation, {time.strftime('%Y-%m-%d')}")
+    if not args.no_cold:
+        table(args.data, exercises, trained=False)
+    if not args.no_trained:
+        table(args.data, exercises, trained=True)
+
+
+if __name__ == "__main__":
+    main()

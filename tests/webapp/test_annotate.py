@@ -1,0 +1,91 @@
+"""The tutor annotation data (joint-angle curves with key poses), saving edited key poses, and
+live validation of the feedback grammar."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from django.urls import reverse
+
+from analysis.feedback import default_grammar
+from tests.personas import make_exercise
+from webapp.exercises.models import Exercise
+
+
+@pytest.fixture
+def exercise(world):
+    return make_exercise(world.clinic)
+
+
+def url(name: str, exercise) -> str:
+    return reverse(f"exercises:{name}", kwargs={"pk": exercise.pk})
+
+
+def test_tutor_data_has_angle_curves_and_key_poses(client, world, exercise):
+    client.force_login(world.therapist)
+    body = client.get(url("tutor-data", exercise)).json()
+    assert body["n_frames"] == 73 and body["landmark_frames"] == [0, 41, 72]
+    knee = next(j for j in body["joints"] if "Knee" in j)
+    curve = body["angles_deg"][knee]
+    assert len(curve) == 73 and all(0 <= a <= 180 for a in curve)
+    assert max(curve) - min(curve) > 20, "a squat bends the knee"
+
+
+def test_saving_key_poses(client, world, exercise):
+    client.force_login(world.therapist)
+    knee = next(j for j in client.get(url("tutor-data", exercise)).json()["joints"] if "Knee" in j)
+    answer = client.post(
+        url("landmarks", exercise),
+        {
+            "frames": "72;0;40",
+            "types": "1;1;2",
+            "type_names": json.dumps({"2": "deepest"}),
+            "involved_joints": json.dumps([knee]),
+        },
+    )
+    assert answer.status_code == 200, answer.content
+    exercise.refresh_from_db()
+    assert exercise.tutor_landmark_frames == [0, 40, 72]
+    assert exercise.tutor_landmark_types == [1, 2, 1]
+    assert exercise.landmark_type_names == {"1": "key pose 1", "2": "deepest"}
+    assert exercise.involved_joints == [knee]
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        ({"frames": "0;500", "types": "1;2"}, "between 0 and 72"),
+        ({"frames": "0;10", "types": "2;2"}, "type 1"),
+        ({"frames": "0;x", "types": "1;2"}, "whole numbers"),
+        ({"frames": "0;10", "types": "1;2", "involved_joints": '["Tail"]'}, "Unknown joints"),
+    ],
+)
+def test_bad_key_poses_are_400(client, world, exercise, case):
+    data, reason = case
+    client.force_login(world.therapist)
+    answer = client.post(url("landmarks", exercise), data)
+    assert answer.status_code == 400 and reason in answer.content.decode()
+    exercise.refresh_from_db()
+    assert exercise.tutor_landmark_frames == [0, 41, 72]
+
+
+def test_grammar_live_validation_and_save(client, world, exercise):
+    client.force_login(world.therapist)
+    good = default_grammar(["LeftKnee"], {1: "start", 2: "end of range"})
+    check = client.post(url("grammar", exercise), {"text": good}, content_type="application/json")
+    assert check.json()["valid"] is True
+    bad = good + "\nthis is ( not a rule"
+    verdict = client.post(url("grammar", exercise), {"text": bad}, content_type="application/json")
+    body = verdict.json()
+    assert body["valid"] is False and body["line"] >= 2 and body["column"] >= 1 and body["message"]
+    refused = client.post(
+        url("grammar", exercise), {"text": bad, "save": True}, content_type="application/json"
+    )
+    assert refused.status_code == 400
+    assert Exercise.objects.get(pk=exercise.pk).feedback_grammar == ""
+    saved = client.post(
+        url("grammar", exercise), {"text": good, "save": True}, content_type="application/json"
+    )
+    assert saved.json()["saved"] is True
+    assert Exercise.objects.get(pk=exercise.pk).feedback_grammar == good

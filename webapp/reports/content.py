@@ -1,0 +1,112 @@
+"""What a report says, as plain data shared by the PDF and the printable HTML."""
+
+from __future__ import annotations
+
+from datetime import date
+from typing import Any
+
+from django.utils import timezone
+
+from webapp.patients.progress import patient_progress
+from webapp.reports import playback
+
+MAX_POSES = 4
+
+
+def fmt(value: Any, digits: int = 0) -> str:
+    return "–" if value is None else f"{float(value):.{digits}f}"
+
+
+def key_poses(run, summary: dict) -> tuple[list, list[int]]:
+    try:
+        arrays = playback.load_arrays(run)
+    except (OSError, ValueError, KeyError):
+        return [], []
+    positions = arrays["patient_positions"]
+    kinds = playback.type_names(run)
+    poses = []
+    for item in (summary.get("landmarks") or [])[:MAX_POSES]:
+        frame = min(int(item["frame"]), positions.shape[0] - 1)
+        name = kinds.get(str(item["type"]), f"pose {item['type']}")
+        poses.append((f"{name} · frame {frame}", positions[frame]))
+    return poses, [int(p) for p in arrays["parents"]]
+
+
+def recording_content(recording) -> dict[str, Any]:
+    run = playback.latest_succeeded(recording)
+    exercise = recording.exercise.name if recording.exercise else "no exercise"
+    content: dict[str, Any] = {
+        "title": f"Recording report · {recording.patient.display_name}",
+        "header": [
+            f"Clinic: {recording.clinic.name}",
+            f"Patient: {recording.patient.display_name} · Exercise: {exercise}",
+            f"Recorded {recording.uploaded_at:%d %b %Y %H:%M} · {recording.n_frames} frames at "
+            f"{recording.fps:.0f} fps · report made {timezone.now():%d %b %Y %H:%M}",
+        ],
+        "analysed": run is not None,
+    }
+    if run is None:
+        return content
+    summary = run.summary or {}
+    content["score"] = fmt(summary.get("score"))
+    content["repetitions"] = [
+        [i + 1, f"{r.get('start')}–{r.get('end')}", fmt(r.get("score")), r.get("guidance") or ""]
+        for i, r in enumerate(summary.get("repetitions", []))
+    ]
+    content["feedback"] = [item.get("text", "") for item in summary.get("feedback", [])]
+    gamma = summary.get("gamma") or {}
+    content["rom"] = [
+        [joint, fmt(value, 1), fmt(gamma.get(joint), 2)]
+        for joint, value in (summary.get("range_of_motion") or {}).items()
+    ]
+    content["poses"], content["parents"] = key_poses(run, summary)
+    return content
+
+
+def parse_day(value: str | None) -> date | None:
+    try:
+        return date.fromisoformat(value) if value else None
+    except ValueError:
+        return None
+
+
+def series_by_exercise(points: list[dict], field: str) -> dict[str, list[tuple[float, float]]]:
+    series: dict[str, list[tuple[float, float]]] = {}
+    for i, point in enumerate(points):
+        if point.get(field) is not None:
+            series.setdefault(point["exercise_name"] or "?", []).append((i + 1, point[field]))
+    return series
+
+
+def rom_series(points: list[dict]) -> dict[str, list[tuple[float, float]]]:
+    series: dict[str, list[tuple[float, float]]] = {}
+    for i, point in enumerate(points):
+        for joint, value in (point.get("range_of_motion") or {}).items():
+            series.setdefault(joint, []).append((i + 1, float(value)))
+    return dict(list(series.items())[:5])
+
+
+def progress_content(patient, since: date | None, until: date | None) -> dict[str, Any]:
+    points = patient_progress(patient, since=since, until=until)
+    period = f"{since or 'start'} to {until or 'today'}"
+    return {
+        "title": f"Progress report · {patient.display_name}",
+        "header": [
+            f"Clinic: {patient.clinic.name}",
+            f"Patient: {patient.display_name} · period {period} · {len(points)} sessions",
+            f"Report made {timezone.now():%d %b %Y %H:%M}",
+        ],
+        "points": points,
+        "rows": [
+            [
+                p["date"][:10],
+                p["exercise_name"] or "",
+                fmt(p["score"]),
+                p["repetitions"],
+                "–" if p["pain_score"] is None else p["pain_score"],
+            ]
+            for p in points
+        ],
+        "score_series": series_by_exercise(points, "score"),
+        "rom_series": rom_series(points),
+    }

@@ -1,0 +1,148 @@
+"""PDF reports drawn with reportlab and its native charts (no system libraries).
+
+`recording_pdf` describes one analysed recording; `progress_pdf` one patient over a period.
+Both take plain data (built by `webapp.reports.content`) so they are easy to test.
+"""
+
+from __future__ import annotations
+
+import io
+from typing import Any
+
+import numpy as np
+from reportlab.graphics.charts.barcharts import VerticalBarChart
+from reportlab.graphics.charts.lineplots import LinePlot
+from reportlab.graphics.shapes import Circle, Drawing, Line, String
+from reportlab.lib import colors
+from reportlab.lib.pagesizes import A4
+from reportlab.lib.styles import getSampleStyleSheet
+from reportlab.lib.units import cm
+from reportlab.platypus import Paragraph, SimpleDocTemplate, Spacer, Table, TableStyle
+
+STYLES = getSampleStyleSheet()
+GRID = TableStyle(
+    [
+        ("GRID", (0, 0), (-1, -1), 0.4, colors.grey),
+        ("BACKGROUND", (0, 0), (-1, 0), colors.HexColor("#eef2f6")),
+        ("FONTSIZE", (0, 0), (-1, -1), 9),
+    ]
+)
+PALETTE = [colors.HexColor(c) for c in ("#1f6feb", "#2da44e", "#8250df", "#d4772c", "#cf222e")]
+
+
+def paragraph(text: str, style: str = "BodyText") -> Paragraph:
+    escaped = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return Paragraph(escaped, STYLES[style])
+
+
+def table(rows: list[list[Any]], widths: list[float] | None = None) -> Table:
+    t = Table([[str(c) for c in row] for row in rows], colWidths=widths, repeatRows=1)
+    t.setStyle(GRID)
+    return t
+
+
+def bar_chart(values: list[float], labels: list[str], title: str) -> Drawing:
+    drawing = Drawing(16 * cm, 6 * cm)
+    chart = VerticalBarChart()
+    chart.x, chart.y, chart.width, chart.height = 40, 30, 14 * cm, 4 * cm
+    chart.data = [values or [0]]
+    chart.categoryAxis.categoryNames = labels or [""]
+    chart.valueAxis.valueMin, chart.valueAxis.valueMax = 0, 100
+    chart.bars[0].fillColor = PALETTE[0]
+    drawing.add(chart)
+    drawing.add(String(40, 6 * cm - 12, title, fontSize=10))
+    return drawing
+
+
+def line_chart(series: dict[str, list[tuple[float, float]]], title: str) -> Drawing:
+    drawing = Drawing(16 * cm, 6.5 * cm)
+    names = [name for name, points in series.items() if points]
+    plot = LinePlot()
+    plot.x, plot.y, plot.width, plot.height = 40, 40, 11 * cm, 4.4 * cm
+    plot.data = [series[name] for name in names] or [[(0, 0)]]
+    for i in range(len(plot.data)):
+        plot.lines[i].strokeColor = PALETTE[i % len(PALETTE)]
+        plot.lines[i].strokeWidth = 1.5
+    drawing.add(plot)
+    drawing.add(String(40, 6.5 * cm - 12, title, fontSize=10))
+    for i, name in enumerate(names[:5]):
+        y = 6.5 * cm - 30 - 12 * i
+        drawing.add(Line(12.6 * cm, y + 3, 13.2 * cm, y + 3, strokeColor=PALETTE[i]))
+        drawing.add(String(13.4 * cm, y, name[:22], fontSize=8))
+    return drawing
+
+
+def pose_drawing(poses: list[tuple[str, np.ndarray]], parents: list[int]) -> Drawing:
+    """Stick figures (front view, x and y) of key poses side by side: (J, 3) each."""
+    width, height = 16 * cm, 5 * cm
+    drawing = Drawing(width, height)
+    slot = width / max(len(poses), 1)
+    for i, (label, pose) in enumerate(poses):
+        xy = pose[:, :2]
+        lo, hi = xy.min(axis=0), xy.max(axis=0)
+        scale = 0.8 * min(slot, height - 20) / max(float((hi - lo).max()), 1e-6)
+        cx = i * slot + slot / 2 - scale * (lo[0] + hi[0]) / 2
+        pts = [(cx + scale * x, 14 - scale * lo[1] + scale * y) for x, y in xy]
+        for j, p in enumerate(parents):
+            if p >= 0:
+                drawing.add(Line(*pts[p], *pts[j], strokeColor=PALETTE[0], strokeWidth=1.4))
+        for x, y in pts:
+            drawing.add(Circle(x, y, 1.2, fillColor=colors.black, strokeColor=None))
+        drawing.add(String(i * slot + 4, 2, label[:24], fontSize=7))
+    return drawing
+
+
+def build(story: list[Any], title: str) -> bytes:
+    buffer = io.BytesIO()
+    doc = SimpleDocTemplate(
+        buffer,
+        pagesize=A4,
+        title=title,
+        author="Physio dashboard",
+        leftMargin=2 * cm,
+        rightMargin=2 * cm,
+        topMargin=1.8 * cm,
+        bottomMargin=1.8 * cm,
+    )
+    doc.build(story)
+    return buffer.getvalue()
+
+
+def recording_pdf(content: dict[str, Any]) -> bytes:
+    story: list[Any] = [paragraph(content["title"], "Title")]
+    story += [paragraph(line) for line in content["header"]]
+    story.append(Spacer(1, 0.4 * cm))
+    if not content.get("analysed"):
+        story.append(paragraph("This recording has no analysis result yet."))
+        return build(story, content["title"])
+    story.append(paragraph(f"Score {content['score']} / 100", "Heading2"))
+    reps = content["repetitions"]
+    story.append(table([["#", "Frames", "Score", "Guidance"], *reps]))
+    story.append(
+        bar_chart([float(r[2]) for r in reps], [str(r[0]) for r in reps], "Score per repetition")
+    )
+    story.append(paragraph("Feedback", "Heading2"))
+    story += [paragraph(f"• {text}") for text in content["feedback"]] or [paragraph("No remarks.")]
+    if content.get("poses"):
+        story.append(paragraph("Key poses", "Heading2"))
+        story.append(pose_drawing(content["poses"], content["parents"]))
+    if content.get("rom"):
+        story.append(paragraph("Range of motion (degrees)", "Heading2"))
+        story.append(table([["Joint", "Range", "γ"], *content["rom"]]))
+    return build(story, content["title"])
+
+
+def progress_pdf(content: dict[str, Any]) -> bytes:
+    story: list[Any] = [paragraph(content["title"], "Title")]
+    story += [paragraph(line) for line in content["header"]]
+    story.append(Spacer(1, 0.4 * cm))
+    rows = content["rows"]
+    if not rows:
+        story.append(paragraph("No analysed recordings in this period."))
+        return build(story, content["title"])
+    story.append(line_chart(content["score_series"], "Score by session"))
+    if content["rom_series"]:
+        story.append(line_chart(content["rom_series"], "Range of motion by session (degrees)"))
+    story.append(paragraph("Sessions", "Heading2"))
+    story.append(table([["Date", "Exercise", "Score", "Repetitions", "Pain"], *rows]))
+    return build(story, content["title"])

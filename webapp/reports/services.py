@@ -1,0 +1,37 @@
+"""Where reports are stored and how their generation is requested (after the commit).
+
+A report's storage name includes what it depends on (the run, or the runs of the period), so a
+new analysis makes a new report and a stored one is never stale.
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+from django.core.files.storage import default_storage
+from django.db import transaction
+
+from webapp.patients.progress import patient_progress
+from webapp.reports import playback
+
+
+def recording_report_name(recording) -> str:
+    run = playback.latest_succeeded(recording)
+    return f"reports/recording-{recording.pk}-{run.pk if run else 'none'}.pdf"
+
+
+def progress_report_name(patient, since, until) -> str:
+    runs = ",".join(p["run"] for p in patient_progress(patient, since=since, until=until))
+    digest = hashlib.sha256(runs.encode()).hexdigest()[:16]
+    return f"reports/progress-{patient.pk}-{since or 'start'}-{until or 'now'}-{digest}.pdf"
+
+
+def request_report(kind: str, object_id: str, name: str, since=None, until=None) -> bool:
+    """Enqueue the report unless it is stored; True when it is ready now."""
+    from webapp.reports.tasks import make_report
+
+    if default_storage.exists(name):
+        return True
+    args = [kind, str(object_id), name, since and since.isoformat(), until and until.isoformat()]
+    transaction.on_commit(lambda: make_report.delay(*args))
+    return default_storage.exists(name)  # eager Celery outside a transaction: already made

@@ -1,0 +1,54 @@
+// Progression charts of one patient over sessions (patients:progress JSON endpoint): score, range
+// of motion per joint, γ, repetitions against the prescribed target, and an adherence calendar.
+(async function () {
+  const box = document.getElementById("progress");
+  if (!box || !window.Plotly) return;
+  const { points: all } = await fetch(box.dataset.url).then((r) => r.json());
+  const prescriptions = JSON.parse(document.getElementById("prescriptions").textContent);
+  if (!all.length) { document.getElementById("progress-empty").hidden = false; box.dataset.ready = "1"; return; }
+  const config = { displaylogo: false, responsive: true };
+  const layout = (title, extra = {}) => ({ margin: { t: 10, r: 10, b: 40, l: 50 }, yaxis: { title }, legend: { orientation: "h" }, ...extra });
+  const select = document.getElementById("exercise-filter");
+  [...new Set(all.map((p) => p.exercise_name || "?"))].forEach((name) => select.add(new Option(name, name)));
+
+  function perJoint(points, field) {
+    const dates = points.map((p) => p.date.slice(0, 10));
+    const joints = [...new Set(points.flatMap((p) => Object.keys(p[field] || {})))];
+    return joints.map((j) => ({ x: dates, y: points.map((p) => (p[field] || {})[j] ?? null), name: j, mode: "lines+markers", connectgaps: true }));
+  }
+
+  function adherence(points) {
+    // Weeks (columns) x weekdays (rows), counting sessions per day over the last 12 weeks.
+    const today = new Date();
+    const monday = new Date(today); monday.setDate(today.getDate() - ((today.getDay() + 6) % 7) - 7 * 11);
+    const z = Array.from({ length: 7 }, () => Array(12).fill(0));
+    points.forEach((p) => {
+      const day = Math.floor((new Date(p.date) - monday) / 86400000);
+      if (day >= 0 && day < 84) z[day % 7][Math.floor(day / 7)] += 1;
+    });
+    const weeks = Array.from({ length: 12 }, (_, w) => { const d = new Date(monday); d.setDate(d.getDate() + 7 * w); return d.toISOString().slice(0, 10); });
+    return [{ type: "heatmap", z, x: weeks, y: ["Mon", "Tue", "Wed", "Thu", "Fri", "Sat", "Sun"], colorscale: [[0, "#f3f5f8"], [1, "#2da44e"]], zmin: 0, showscale: false, xgap: 2, ygap: 2 }];
+  }
+
+  function draw() {
+    const chosen = select.value;
+    const points = chosen ? all.filter((p) => (p.exercise_name || "?") === chosen) : all;
+    const dates = points.map((p) => p.date.slice(0, 10));
+    const byExercise = {};
+    points.forEach((p) => { (byExercise[p.exercise_name || "?"] ??= []).push(p); });
+    const scores = Object.entries(byExercise).map(([name, ps]) => ({ x: ps.map((p) => p.date.slice(0, 10)), y: ps.map((p) => p.score), name, mode: "lines+markers" }));
+    Plotly.react("chart-score", scores, layout("score", { yaxis: { title: "score", range: [0, 100] } }), config);
+    Plotly.react("chart-rom", perJoint(points, "range_of_motion"), layout("degrees"), config);
+    Plotly.react("chart-gamma", perJoint(points, "gamma"), layout("γ"), config);
+    const reps = [{ type: "bar", x: dates, y: points.map((p) => p.repetitions), name: "repetitions", marker: { color: "#1f6feb" } }];
+    const targets = prescriptions.filter((p) => !chosen || p.exercise === chosen).map((p) => ({
+      x: [p.start, p.end || new Date().toISOString().slice(0, 10)], y: [p.target_repetitions, p.target_repetitions],
+      name: `target · ${p.exercise}`, mode: "lines", line: { dash: "dash" },
+    }));
+    Plotly.react("chart-reps", [...reps, ...targets], layout("repetitions"), config);
+    Plotly.react("chart-adherence", adherence(points), layout("", { margin: { t: 10, r: 10, b: 40, l: 40 } }), config);
+  }
+  select.addEventListener("change", draw);
+  draw();
+  box.dataset.ready = "1";
+})();

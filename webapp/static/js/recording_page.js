@@ -1,0 +1,173 @@
+// The recording page: loads the playback payload, drives the 3D viewer, the timeline with
+// repetitions, key poses and feedback captions, and the Plotly charts linked to playback.
+import { Playback, SKELETON_COLOURS } from "./viewer.js";
+
+const TYPE_COLOURS = ["#0969da", "#bf3989", "#1a7f37", "#9a6700", "#8250df", "#cf222e"];
+const hex = (n) => "#" + n.toString(16).padStart(6, "0");
+const $ = (id) => document.getElementById(id);
+
+async function load(root) {
+  const [meta, buffer] = await Promise.all([
+    fetch(root.dataset.playback).then((r) => r.json()),
+    fetch(root.dataset.positions).then((r) => (r.ok ? r.arrayBuffer() : null)),
+  ]);
+  if (!meta.available || !buffer) {
+    root.querySelector(".viewer-stage").textContent = meta.message || "No playback data.";
+    return null;
+  }
+  return { meta, positions: new Float32Array(buffer) };
+}
+
+function addToggles(playback) {
+  const box = $("skeleton-toggles");
+  playback.meta.skeletons.forEach((skeleton, s) => {
+    const label = document.createElement("label");
+    label.style.color = hex(SKELETON_COLOURS[skeleton.key] ?? 0x888888);
+    label.innerHTML = `<input type="checkbox" data-skeleton="${s}"> ${skeleton.label}`;
+    const input = label.querySelector("input");
+    input.checked = playback.visible[s];
+    input.addEventListener("change", () => { playback.visible[s] = input.checked; playback.setFrame(playback.frame); });
+    box.append(label, " ");
+  });
+}
+
+function addControls(playback) {
+  const play = $("play");
+  const setPlaying = (on) => { playback.playing = on; play.textContent = on ? "Pause" : "Play"; };
+  play.addEventListener("click", () => setPlaying(!playback.playing));
+  $("step-back").addEventListener("click", () => { setPlaying(false); playback.setFrame(playback.frame - 1); });
+  $("step-fwd").addEventListener("click", () => { setPlaying(false); playback.setFrame(playback.frame + 1); });
+  $("speed").addEventListener("change", (e) => { playback.speed = Number(e.target.value); });
+  $("side-by-side").addEventListener("change", (e) => { playback.sideBySide = e.target.checked; playback.setFrame(playback.frame); });
+  const loop = $("loop");
+  playback.meta.repetitions.forEach((rep, i) => loop.add(new Option(`#${i + 1} (${rep.start}–${rep.end})`, i)));
+  loop.addEventListener("change", () => {
+    const rep = playback.meta.repetitions[loop.value];
+    playback.loop = rep ? [rep.start, rep.end] : null;
+    if (rep) playback.setFrame(rep.start);
+  });
+  $("replay-key").addEventListener("click", () => {
+    const before = playback.meta.landmarks.filter((m) => m.frame <= playback.frame);
+    const last = before.length ? before[before.length - 1] : playback.meta.landmarks[0];
+    playback.setFrame(last ? last.frame : 0);
+    setPlaying(true);
+  });
+  const scrub = $("scrub");
+  scrub.max = playback.nFrames - 1;
+  scrub.addEventListener("input", () => playback.setFrame(Number(scrub.value)));
+  return setPlaying;
+}
+
+function addTimeline(playback) {
+  const line = $("timeline");
+  const at = (frame) => `${(100 * frame) / Math.max(1, playback.nFrames - 1)}%`;
+  playback.meta.repetitions.forEach((rep, i) => {
+    const bar = document.createElement("div");
+    bar.className = "rep";
+    bar.title = `Repetition ${i + 1}: score ${Math.round(rep.score ?? 0)}`;
+    Object.assign(bar.style, { position: "absolute", left: at(rep.start), width: `calc(${at(rep.end)} - ${at(rep.start)})`, top: "4px", height: "14px", background: "#c8d7ea", borderRadius: "3px" });
+    line.append(bar);
+  });
+  playback.meta.landmarks.forEach((mark) => {
+    const button = document.createElement("button");
+    button.type = "button";
+    button.className = "landmark";
+    button.dataset.frame = mark.frame;
+    button.title = `${mark.name} · frame ${mark.frame}`;
+    Object.assign(button.style, { position: "absolute", left: at(mark.frame), top: "24px", width: "10px", height: "18px", marginLeft: "-5px", padding: 0, border: 0, borderRadius: "2px", cursor: "pointer", background: TYPE_COLOURS[(mark.type - 1 + TYPE_COLOURS.length) % TYPE_COLOURS.length] });
+    button.addEventListener("click", () => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(mark.frame); });
+    line.append(button);
+  });
+  const cursor = document.createElement("div");
+  cursor.id = "timeline-cursor";
+  Object.assign(cursor.style, { position: "absolute", top: 0, bottom: 0, width: "2px", background: "#cf222e", left: "0%" });
+  line.append(cursor);
+  line.addEventListener("click", (e) => {
+    if (e.target !== line) return;
+    const box = line.getBoundingClientRect();
+    playback.setFrame(((e.clientX - box.left) / box.width) * (playback.nFrames - 1));
+  });
+  return (frame) => { cursor.style.left = at(frame); };
+}
+
+function captions(playback) {
+  const caption = $("caption");
+  const spoken = new Set();
+  let previous = -1;
+  return (frame) => {
+    for (const item of playback.meta.feedback) {
+      const crossed = playback.playing && item.frame > previous && item.frame <= frame;
+      if (!crossed && item.frame !== frame) continue;
+      caption.textContent = item.text;
+      const tip = item.tip || item.text;
+      if (crossed && $("speak").checked && !spoken.has(tip) && window.speechSynthesis) {
+        spoken.add(tip);  // each tip once
+        window.speechSynthesis.speak(new SpeechSynthesisUtterance(tip));
+      }
+    }
+    previous = frame;
+  };
+}
+
+function charts(playback) {
+  if (!window.Plotly) return () => {};
+  const { meta } = playback;
+  const seconds = (f) => f / meta.fps;
+  const x = meta.angles.frames.map(seconds);
+  // Three joints shown at first (the rest one click away in the legend) keep the chart readable.
+  const joints = [...new Set(meta.angles.series.map((s) => s.joint))];
+  const traces = meta.angles.series.map((s) => ({
+    x, y: s.values, name: `${s.joint} · ${s.skeleton}`, mode: "lines",
+    line: { dash: s.skeleton === "patient" ? "solid" : "dot" },
+    visible: joints.indexOf(s.joint) < 3 ? true : "legendonly",
+  }));
+  const marks = meta.landmarks.map((m) => ({ type: "line", xref: "x", yref: "paper", x0: seconds(m.frame), x1: seconds(m.frame), y0: 0, y1: 1, line: { color: "#bbb", width: 1, dash: "dot" } }));
+  const layout = { margin: { t: 10, r: 10, b: 40, l: 45 }, xaxis: { title: "time (s)" }, yaxis: { title: "angle (°)" }, shapes: marks, legend: { orientation: "h" } };
+  const chart = $("chart-angles");
+  Plotly.newPlot(chart, traces, layout, { displaylogo: false, responsive: true });
+  chart.on("plotly_click", (e) => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(e.points[0].x * meta.fps); });
+  const reps = meta.repetitions;
+  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => r.guidance || ""), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 30, l: 40 }, yaxis: { range: [0, 100], title: "score" } }, { displaylogo: false, responsive: true });
+  // The time cursor is a positioned overlay, not a Plotly shape: relayout is too slow to run
+  // at the animation rate.
+  const cursor = document.createElement("div");
+  cursor.id = "chart-cursor";
+  Object.assign(cursor.style, { position: "absolute", width: "2px", background: "#cf222e", pointerEvents: "none" });
+  chart.style.position = "relative";
+  chart.append(cursor);
+  return (frame) => {
+    const full = chart._fullLayout;
+    if (!full || !full.xaxis) return;
+    cursor.style.left = `${full.margin.l + full.xaxis.l2p(seconds(frame))}px`;
+    cursor.style.top = `${full.margin.t}px`;
+    cursor.style.height = `${full.height - full.margin.t - full.margin.b}px`;
+  };
+}
+
+async function main() {
+  const root = $("viewer");
+  if (!root) return;
+  const data = await load(root);
+  if (!data) return;
+  const playback = new Playback(root, data.meta, data.positions);
+  window.physioPlayback = playback;  // for the browser tests and measurements
+  addToggles(playback);
+  addControls(playback);
+  const moveCursor = addTimeline(playback);
+  const showCaption = captions(playback);
+  const moveChartCursor = charts(playback);
+  const label = $("frame-label");
+  const scrub = $("scrub");
+  playback.onFrame((frame) => {
+    label.textContent = `frame ${frame} · ${(frame / data.meta.fps).toFixed(2)} s`;
+    scrub.value = frame;
+    moveCursor(frame);
+    showCaption(frame);
+    moveChartCursor(frame);
+  });
+  playback.setFrame(0);
+  root.dataset.readyAt = performance.now().toFixed(0);  // ms since navigation start
+  root.dataset.ready = "1";
+}
+
+main();
