@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 PORT ?= 8000
 PYTEST_ARGS ?=
 
-.PHONY: run worker beat test test-analysis lint format bench fuzz migrate demo clean
+.PHONY: run worker beat test test-analysis lint format bench bench-browser fuzz migrate demo clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -59,6 +59,13 @@ format: $(VENV)/.stamp-python
 
 bench: $(VENV)/.stamp-bench
 	$(BIN)/python -m bench.bench_bvh
+	$(BIN)/python -m bench.bench_dtw
+	NUMBA_NUM_THREADS=1 $(BIN)/python -m bench.bench_pipeline
+
+# Browser figures (frame rate, time to interactive) and screenshots into docs/img/.
+bench-browser: deps
+	bash tests/e2e/ensure_chromium.sh
+	E2E_DOCS=1 $(BIN)/python -m pytest tests/e2e -q
 
 # Long fuzzing run of the BVH parser (the suite runs a short fixed-seed version).
 fuzz: $(VENV)/.stamp-python

@@ -28,6 +28,7 @@ from analysis.scoring import RepetitionScorer, deviations, fit_scorer
 from analysis.segmentation import fit_axis
 
 FloatArray = npt.NDArray[np.float64]
+SCORING_FPS = 30.0
 Progress = Callable[[str, float], None]
 
 
@@ -105,8 +106,11 @@ def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
     scored = list(range(1, len(names)))
     tutor_templates = templates(flatten(all_points[:, scored]), reps)
     report("calibration", 0.5)
-    labelled = training_deviations(training, tutor_templates, [names[j] for j in scored])
-    scorer = fit_scorer(tutor_templates, labelled)
+    # Scores compare shapes of movement: 30 frames a second are plenty, and DTW costs n × m.
+    step = max(1, round(tutor.fps / SCORING_FPS))
+    coarse = [t[::step] for t in tutor_templates]
+    labelled = training_deviations(training, coarse, [names[j] for j in scored], step)
+    scorer = fit_scorer(coarse, labelled)
     components = {
         "axis": axis,
         "mirror": mirror_permutation(names),
@@ -114,6 +118,7 @@ def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
         "scored_index": scored,
         "templates": tutor_templates,
         "scorer": scorer,
+        "scoring_step": step,
         "tutor_reps": reps,
         **assessment_parts(tutor, frames, types, training),
     }
@@ -146,7 +151,10 @@ def assessment_parts(
 
 
 def training_deviations(
-    training: Sequence[TrainingRecording], tutor_templates: list[FloatArray], joints: list[str]
+    training: Sequence[TrainingRecording],
+    tutor_templates: list[FloatArray],
+    joints: list[str],
+    step: int = 1,
 ) -> list[tuple[FloatArray, bool]]:
     """(deviation vector, is correct) for every repetition of the labelled recordings."""
     out: list[tuple[FloatArray, bool]] = []
@@ -155,7 +163,7 @@ def training_deviations(
         feats = flatten(scaled_positions(item.motion, [names.index(n) for n in joints]))
         correct = item.label in ("correct", "1")
         for a, b in tutor_repetitions(item.landmark_frames, item.landmark_types):
-            segment = relative_to_start(feats[a : b + 1])
+            segment = relative_to_start(feats[a : b + 1])[::step]
             out.append((deviations(segment, tutor_templates), correct))
     return out
 

@@ -56,10 +56,11 @@ def repetition_results(
     parts = model.components
     movement = flatten(prepared.points[:, parts["scored_index"]])
     tutor_frames = float(np.median([len(t) for t in parts["templates"]]))
+    step = parts["scoring_step"]
     out = []
     for start, end, peak in zip(segments.starts, segments.ends, segments.peaks, strict=True):
         segment = relative_to_start(movement[start : end + 1])
-        dev = deviations(segment, parts["templates"])
+        dev = deviations(segment[::step], [t[::step] for t in parts["templates"]])
         reach = float(progress[peak] - progress[start])
         tempo = (end - start + 1) / tutor_frames
         out.append({

@@ -88,8 +88,11 @@ def make_exercise(
 
     frames, types = fixture_landmarks(source)
     exercise = Exercise(
-        clinic=clinic, name=name, tutor_landmark_frames=frames,
-        tutor_landmark_types=types, landmark_type_names={"1": "start", "2": "end of range"},
+        clinic=clinic,
+        name=name,
+        tutor_landmark_frames=frames,
+        tutor_landmark_types=types,
+        landmark_type_names={"1": "start", "2": "end of range"},
     )
     exercise.tutor_file.save("tutor.bvh.gz", ContentFile(fixture_bytes(source)), save=False)
     exercise.save()

@@ -162,7 +162,7 @@ ANALYSIS_LEASE_SECONDS = int(os.environ.get("ANALYSIS_LEASE_SECONDS", "60"))
 # Paper 002 retrieval: principal components of the 2-bit codes, and how many recordings to compare.
 RETRIEVAL_COMPONENTS = int(os.environ.get("RETRIEVAL_COMPONENTS", "4"))
 RETRIEVAL_MAX_CANDIDATES = int(os.environ.get("RETRIEVAL_MAX_CANDIDATES", "200"))
-# Only for fault-injection tests (tests/workers/test_worker_crash.py): seconds slept after each stage.
+# Fault injection only (tests/workers/test_worker_crash.py): seconds slept after each stage.
 ANALYSIS_STAGE_DELAY_SECONDS = float(os.environ.get("ANALYSIS_STAGE_DELAY_SECONDS", "0"))
 CELERY_TASK_SOFT_TIME_LIMIT = ANALYSIS_SOFT_TIME_LIMIT
 CELERY_TASK_TIME_LIMIT = ANALYSIS_TIME_LIMIT
@@ -192,7 +192,9 @@ REST_FRAMEWORK = {
 }
 SPECTACULAR_SETTINGS = {
     "TITLE": "Physio dashboard API",
-    "DESCRIPTION": "Patient history, exercises and recording uploads for practice-management systems.",
+    "DESCRIPTION": (
+        "Patient history, exercises and recording uploads for practice-management systems."
+    ),
     "VERSION": "1.0.0",
     "SERVE_INCLUDE_SCHEMA": False,
     # Swagger UI from the sidecar package: the docs page works offline.

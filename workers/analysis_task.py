@@ -91,7 +91,7 @@ def previous_levels(recording) -> dict[str, float]:
 
 def npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
     buffer = io.BytesIO()
-    np.savez_compressed(buffer, **arrays)
+    np.savez_compressed(buffer, **arrays)  # type: ignore[arg-type]  # numpy stub: **kwds vs allow_pickle
     return buffer.getvalue()
 
 

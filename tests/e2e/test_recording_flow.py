@@ -51,6 +51,13 @@ def test_upload_play_jump_and_download_report(page, live_server, demo):
     assert page.evaluate("window.physioPlayback.frame") == target
     assert page.inner_text("#frame-label").startswith(f"frame {target} ")
 
+    page.select_option("#speed", "0.25")  # slow, so the jump back is seen before it plays on
+    page.evaluate(f"window.physioPlayback.setFrame({target + 8})")
+    page.click("#replay-key")  # back to the key pose just passed, and play from there
+    assert page.evaluate("window.physioPlayback.playing")
+    assert target <= page.evaluate("window.physioPlayback.frame") < target + 8
+    page.click("#play")  # pause
+
     with page.expect_download() as download:
         page.click("#report-pdf")
     body = Path(download.value.path()).read_bytes()

@@ -26,7 +26,7 @@ def test_tutor_data_has_angle_curves_and_key_poses(client, world, exercise):
     client.force_login(world.therapist)
     body = client.get(url("tutor-data", exercise)).json()
     assert body["n_frames"] == 73 and body["landmark_frames"] == [0, 41, 72]
-    knee = next(j for j in body["joints"] if "Knee" in j)
+    knee = next(j for j in body["joints"] if j == "LeftLowerLeg")
     curve = body["angles_deg"][knee]
     assert len(curve) == 73 and all(0 <= a <= 180 for a in curve)
     assert max(curve) - min(curve) > 20, "a squat bends the knee"
@@ -34,7 +34,9 @@ def test_tutor_data_has_angle_curves_and_key_poses(client, world, exercise):
 
 def test_saving_key_poses(client, world, exercise):
     client.force_login(world.therapist)
-    knee = next(j for j in client.get(url("tutor-data", exercise)).json()["joints"] if "Knee" in j)
+    knee = next(
+        j for j in client.get(url("tutor-data", exercise)).json()["joints"] if j == "LeftLowerLeg"
+    )
     answer = client.post(
         url("landmarks", exercise),
         {
@@ -72,7 +74,7 @@ def test_bad_key_poses_are_400(client, world, exercise, case):
 
 def test_grammar_live_validation_and_save(client, world, exercise):
     client.force_login(world.therapist)
-    good = default_grammar(["LeftKnee"], {1: "start", 2: "end of range"})
+    good = default_grammar(["LeftLowerLeg"], {1: "start", 2: "end of range"})
     check = client.post(url("grammar", exercise), {"text": good}, content_type="application/json")
     assert check.json()["valid"] is True
     bad = good + "\nthis is ( not a rule"
@@ -89,3 +91,12 @@ def test_grammar_live_validation_and_save(client, world, exercise):
     )
     assert saved.json()["saved"] is True
     assert Exercise.objects.get(pk=exercise.pk).feedback_grammar == good
+
+
+def test_annotation_page_links_its_data(client, world, exercise):
+    client.force_login(world.therapist)
+    page = client.get(url("annotate", exercise)).content.decode()
+    assert url("tutor-data", exercise) in page and url("grammar", exercise) in page
+    assert "js/annotate.js" in page
+    detail = client.get(url("detail", exercise)).content.decode()
+    assert url("annotate", exercise) in detail

@@ -108,7 +108,7 @@ def test_api_upload_without_exercise_then_confirm(world, exercises, monkeypatch)
 def test_prescribed_exercises_are_preferred(client, world, exercises):
     from webapp.patients.models import Prescription
 
-    squat, abduction = exercises
+    _, abduction = exercises
     Prescription.objects.create(
         patient=world.patient, exercise=abduction, start_date=datetime.date.today()
     )

@@ -165,3 +165,38 @@ def test_joint_names_fall_back_to_the_tutor_skeleton(client, world, recording):
     arrays = {"patient_positions": np.zeros((2, len(names), 3), np.float32)}
     assert playback.joint_names(run, arrays, len(names)) == names
     assert playback.joint_names(run, arrays, 3) == ["joint 0", "joint 1", "joint 2"]
+
+
+def test_report_name_changes_with_a_new_run_and_period(world, recording):
+    from datetime import date
+
+    from webapp.recordings.models import AnalysisRun
+    from webapp.reports import services
+
+    analysed(recording)
+    first = services.recording_report_name(recording)
+    analysed_again = AnalysisRun.objects.create(recording=recording)  # queued: same report
+    assert services.recording_report_name(recording) == first
+    analysed_again.status = RunStatus.SUCCEEDED
+    analysed_again.arrays.save("again.npz", ContentFile(npz(True)), save=False)
+    analysed_again.save()
+    assert services.recording_report_name(recording) != first
+    whole = services.progress_report_name(world.patient, None, None)
+    empty = services.progress_report_name(world.patient, date(2001, 1, 1), date(2001, 2, 1))
+    assert whole != empty
+
+
+def test_progress_page_lists_prescriptions_and_bad_dates_are_ignored(client, world, recording):
+    from datetime import date
+
+    from webapp.patients.models import Prescription
+
+    analysed(recording)
+    Prescription.objects.create(
+        patient=world.patient, exercise=recording.exercise, start_date=date(2026, 1, 5)
+    )
+    client.force_login(world.therapist)
+    page = client.get(reverse("reports:progress", kwargs={"pk": world.patient.pk}))
+    assert b'"target_repetitions": 10' in page.content
+    printable = reverse("reports:progress-print", kwargs={"pk": world.patient.pk})
+    assert client.get(printable + "?since=not-a-date").status_code == 200

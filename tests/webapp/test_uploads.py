@@ -65,7 +65,7 @@ def test_patient_cannot_upload_for_another_patient(client, world, exercise, sett
 
 
 @pytest.mark.parametrize(
-    ("content", "name", "reason"),
+    "case",
     [
         (b"HIERARCHY\nROOT Hips\n{\n", "broken.bvh", "not a readable BVH"),
         (b"%PDF-1.4 not motion at all", "scan.pdf", "Upload a BVH"),
@@ -73,7 +73,8 @@ def test_patient_cannot_upload_for_another_patient(client, world, exercise, sett
         (gzip.compress(b"MOTION\nFrames: 1\n"), "take.bvh.gz", "not a readable BVH"),
     ],
 )
-def test_bad_files_answer_400_and_store_nothing(client, world, exercise, settings, content, name, reason):
+def test_bad_files_answer_400_and_store_nothing(client, world, exercise, settings, case):
+    content, name, reason = case
     client.force_login(world.therapist)
     response = upload(client, world.patient, exercise, content, name=name)
     assert response.status_code == 400

@@ -15,7 +15,8 @@ from django.contrib.auth.decorators import login_required
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import redirect, render
 from django.urls import reverse
-from django_otp import devices_for_user, login as otp_login, user_has_device
+from django_otp import devices_for_user, user_has_device
+from django_otp import login as otp_login
 from django_otp.plugins.otp_totp.models import TOTPDevice
 
 from webapp.accounts.permissions import require_staff
@@ -24,8 +25,12 @@ EXEMPT_PREFIXES = ("/accounts/2fa/verify/", "/accounts/logout/", "/static/", "/h
 
 
 class CodeForm(forms.Form):
-    code = forms.RegexField(regex=r"^\d{6}$", max_length=6, label="6-digit code",
-                            error_messages={"invalid": "Enter the 6 digits shown in your app."})
+    code = forms.RegexField(
+        regex=r"^\d{6}$",
+        max_length=6,
+        label="6-digit code",
+        error_messages={"invalid": "Enter the 6 digits shown in your app."},
+    )
 
 
 def qr_svg(url: str) -> str:

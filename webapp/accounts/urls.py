@@ -16,12 +16,12 @@ urlpatterns = [
     path("logout/", auth_views.LogoutView.as_view(), name="logout"),
     path(
         "password/change/",
-        auth_views.PasswordChangeView.as_view(success_url=reverse_lazy("accounts:password-changed")),
+        auth_views.PasswordChangeView.as_view(
+            success_url=reverse_lazy("accounts:password-changed")
+        ),
         name="password-change",
     ),
-    path(
-        "password/changed/", auth_views.PasswordChangeDoneView.as_view(), name="password-changed"
-    ),
+    path("password/changed/", auth_views.PasswordChangeDoneView.as_view(), name="password-changed"),
     path(
         "password/reset/",
         auth_views.PasswordResetView.as_view(

@@ -12,7 +12,8 @@ import json
 
 import numpy as np
 from django.contrib.auth.decorators import login_required
-from django.http import HttpRequest, JsonResponse
+from django.http import HttpRequest, HttpResponse, JsonResponse
+from django.shortcuts import render
 from django.views.decorators.http import require_POST
 
 from analysis.bvh import read
@@ -36,6 +37,13 @@ def angle_curves(motion) -> dict[str, list[float]]:
     return {
         name: np.round(angles[:, j], 1).tolist() for j, name in enumerate(motion.skeleton.names)
     }
+
+
+@login_required
+@require_staff
+def annotate_page(request: HttpRequest, pk) -> HttpResponse:
+    exercise = get_exercise_for_user(request, pk)
+    return render(request, "exercises/annotate.html", {"exercise": exercise})
 
 
 @login_required

@@ -10,6 +10,7 @@ urlpatterns = [
     path("<uuid:pk>/", views.exercise_detail, name="detail"),
     path("<uuid:pk>/build/", views.build_model, name="build"),
     path("<uuid:pk>/models.json", views.model_status, name="model-status"),
+    path("<uuid:pk>/annotate/", annotate.annotate_page, name="annotate"),
     path("<uuid:pk>/tutor.json", annotate.tutor_data, name="tutor-data"),
     path("<uuid:pk>/landmarks/", annotate.save_landmarks, name="landmarks"),
     path("<uuid:pk>/grammar/", annotate.check_grammar, name="grammar"),

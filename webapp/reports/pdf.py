@@ -60,6 +60,8 @@ def line_chart(series: dict[str, list[tuple[float, float]]], title: str) -> Draw
     plot = LinePlot()
     plot.x, plot.y, plot.width, plot.height = 40, 40, 11 * cm, 4.4 * cm
     plot.data = [series[name] for name in names] or [[(0, 0)]]
+    sessions = sorted({x for line in plot.data for x, _ in line})
+    plot.xValueAxis.valueSteps = sessions[:: max(1, len(sessions) // 12)]  # whole sessions only
     for i in range(len(plot.data)):
         plot.lines[i].strokeColor = PALETTE[i % len(PALETTE)]
         plot.lines[i].strokeWidth = 1.5
