@@ -38,7 +38,7 @@ from analysis.kinematics import normalised_positions
 from analysis.landmark_eval import Confusion, compromise_intervals, confusion
 from analysis.landmarks import FAITHFUL, LandmarkModel, LandmarkOptions, tutor_cycle
 from analysis.periodic import clean
-from analysis.refining import Candidates, GrammarOptions
+from analysis.refining import Candidates, GrammarOptions, refine
 from analysis.repetitions import repetitions
 from analysis.signature import MotionSignature
 
@@ -284,25 +284,55 @@ def summary_row(name: str, protocol: str, outcomes: list[Outcome]) -> str:
     )
 
 
+GRID_COLUMNS = [(c, ab) for c in ("c45", "nb", "svm") for ab in (False, True)]
+GRID_ROWS = [(cl, se) for cl in ("em", "kmeans", "tc") for se in ("mu1", "mu2")]
+
+
+def grid_scores(data: dict[str, list[Session]], subjects: tuple[str, ...]) -> dict[tuple, list]:
+    """Refined confusions per (classifier, AdaBoost, clustering, selection): one fit and one
+    identification per fold and classifier, then every refining on the same candidates."""
+    cells: dict[tuple, list[tuple[str, Confusion]]] = {}
+    for clf, ab in GRID_COLUMNS:
+        options = replace(FAITHFUL, classifier=clf, adaboost=ab)
+        for sessions in data.values():
+            for test in subjects:
+                tutor, train, tests = split(sessions, test, "loso")
+                model = LandmarkModel(options=options)
+                model.fit(
+                    tutor.motion,
+                    tutor.frames,
+                    tutor.types,
+                    [(s.motion, s.frames, s.types) for s in train],
+                )
+                for s in tests:
+                    found = model.detect(s.motion)
+                    for cl, se in GRID_ROWS:
+                        opts = replace(FAITHFUL.refine, clustering=cl, selection=se)
+                        refined = refine(found.candidates, found.signature, model.means_, opts)
+                        cells.setdefault((clf, ab, cl, se), []).append(
+                            (s.exercise, _score(s, refined))
+                        )
+    return cells
+
+
 def run_grid(data: dict[str, list[Session]], subjects: tuple[str, ...]) -> str:
     """Table 5.5: classifier (± AdaBoost) × clustering × selection on the faithful pipeline;
-    refined π / α* per sample (protocol loso, no periodic cleaning)."""
-    columns = [(c, ab) for c in ("c45", "nb", "svm") for ab in (False, True)]
-    rows = [(cl, se) for cl in ("em", "kmeans", "tc") for se in ("mu1", "mu2")]
+    refined π / α* per sample averaged per exercise then over exercises (protocol loso)."""
+    cells = grid_scores(data, subjects)
     head = "| clust. | sel. | " + " | ".join(
-        f"{c}{'+AB' if ab else ''} π / α*" for c, ab in columns
+        f"{c}{'+AB' if ab else ''} π / α*" for c, ab in GRID_COLUMNS
     )
-    lines = [head + " |", "|---" * (len(columns) + 2) + "|"]
-    for cl, se in rows:
-        cells = []
-        for clf, ab in columns:
-            refine = replace(FAITHFUL.refine, clustering=cl, selection=se)
-            options = replace(FAITHFUL, classifier=clf, adaboost=ab, refine=refine)
-            m = exercise_average(
-                run_config(Config("", options, "loso", False), data, subjects), "refined"
-            )
-            cells.append(f"{m['pi']:.2f} / {m['strict']:.2f}")
-        lines.append(f"| {cl} | {se} | " + " | ".join(cells) + " |")
+    lines = [head + " |", "|---" * (len(GRID_COLUMNS) + 2) + "|"]
+    for cl, se in GRID_ROWS:
+        row = []
+        for clf, ab in GRID_COLUMNS:
+            per: dict[str, list[Confusion]] = {}
+            for exercise, c in cells[(clf, ab, cl, se)]:
+                per.setdefault(exercise, []).append(c)
+            pi = _mean([_mean([c.precision for c in v]) for v in per.values()])
+            strict = _mean([_mean([c.strict_accuracy for c in v]) for v in per.values()])
+            row.append(f"{pi:.2f} / {strict:.2f}")
+        lines.append(f"| {cl} | {se} | " + " | ".join(row) + " |")
     return "\n".join(lines)
 
 

@@ -12,18 +12,28 @@ from webapp.recordings.models import AnalysisRun, RunStatus
 REAPED_USER_MESSAGE = "The analysis did not finish in time. Please start it again."
 
 
-def reap_stuck_runs() -> int:
-    """Mark runs RUNNING for longer than the hard time limit (plus a margin) as FAILED.
+def reap_window_seconds() -> int:
+    """How long a run may stay RUNNING before the reaper fails it.
 
-    The hard limit kills a task that overruns, so a run still RUNNING after it has lost its
-    worker (killed, machine gone). Failing it with a reason keeps nothing stuck; the user can
-    re-run. Returns the number of runs reaped.
+    A worker killed mid-analysis leaves its message unacknowledged; the broker delivers it again
+    after the visibility timeout and the redelivered task reclaims the run (its lease has expired)
+    and finishes it. So the reaper waits past both the hard time limit and the visibility
+    timeout (plus a minute): it only fails runs whose message was lost, not ones about to resume.
     """
-    margin = timedelta(seconds=settings.ANALYSIS_TIME_LIMIT + 60)
-    cutoff = timezone.now() - margin
+    visibility = settings.CELERY_BROKER_TRANSPORT_OPTIONS.get("visibility_timeout", 0)
+    return max(settings.ANALYSIS_TIME_LIMIT, int(visibility)) + 60
+
+
+def reap_stuck_runs() -> int:
+    """Mark runs RUNNING for longer than `reap_window_seconds` as FAILED with a reason.
+
+    Failing it keeps nothing stuck; the user sees the reason and can re-run. A reclaimed run
+    restarts its window (claim sets started_at). Returns the number of runs reaped.
+    """
+    cutoff = timezone.now() - timedelta(seconds=reap_window_seconds())
     return AnalysisRun.objects.filter(status=RunStatus.RUNNING, started_at__lt=cutoff).update(
         status=RunStatus.FAILED,
         finished_at=timezone.now(),
         user_error=REAPED_USER_MESSAGE,
-        developer_error="reaped: RUNNING past ANALYSIS_TIME_LIMIT",
+        developer_error="reaped: RUNNING past the time limit and the broker's redelivery",
     )
