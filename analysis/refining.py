@@ -108,6 +108,8 @@ def kmeans_clusters(points: FloatArray, n_clusters: int, seed: int) -> IntArray:
 
 def em_clusters(points: FloatArray, counts: list[int], seed: int) -> IntArray:
     """EM (Gaussian mixture, diagonal covariances) labels (n,), the count chosen by BIC."""
+    if points.shape[0] < 2:  # a mixture needs two points; one candidate is its own cluster
+        return np.zeros(points.shape[0], dtype=np.int64)
     best: tuple[float, IntArray] | None = None
     for k in sorted({max(1, min(c, points.shape[0])) for c in counts}):
         model = GaussianMixture(k, covariance_type="diag", reg_covar=1e-3, random_state=seed)

@@ -118,6 +118,12 @@ def test_kmeans_without_a_count_uses_the_gap_estimate():
     assert len(set(labels.tolist())) == 2
 
 
+def test_a_single_candidate_is_its_own_cluster():
+    for method in ("em", "kmeans", "tc", "gap"):
+        out = refine(cands([7], [2]), np.zeros((10, 1)), MEANS, RefineOptions(clustering=method))
+        assert (out.frames.tolist(), out.types.tolist()) == ([7], [2]), method
+
+
 def test_refine_of_nothing_is_nothing():
     out = refine(cands([], []), np.zeros((5, 1)), MEANS)
     assert out.frames.size == 0
