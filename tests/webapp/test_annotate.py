@@ -32,6 +32,14 @@ def test_tutor_data_has_angle_curves_and_key_poses(client, world, exercise):
     assert max(curve) - min(curve) > 20, "a squat bends the knee"
 
 
+def test_tutor_data_suggests_rest_and_extreme_poses_near_the_labelled_ones(client, world, exercise):
+    client.force_login(world.therapist)
+    body = client.get(url("tutor-data", exercise)).json()
+    assert body["suggested_types"] == [1, 2, 1]
+    offsets = [abs(s - f) for s, f in zip(body["suggested_frames"], [0, 41, 72], strict=True)]
+    assert max(offsets) <= 5, body["suggested_frames"]
+
+
 def test_saving_key_poses(client, world, exercise):
     client.force_login(world.therapist)
     knee = next(

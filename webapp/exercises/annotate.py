@@ -1,8 +1,9 @@
 """Data and edits behind the tutor's key-pose annotation and grammar editing (JSON endpoints).
 
 `tutor_data` gives the tutor's joint-angle curves (the rotation angle of every joint's local
-rotation, degrees per frame) with the marked key poses, for the annotation page to draw; the page
-posts the edited key poses to `save_landmarks`. `check_grammar` validates feedback-grammar text as
+rotation, degrees per frame) with the marked key poses and the key poses the system suggests (rest
+and extreme poses), for the annotation page to draw; the page posts the edited key poses to
+`save_landmarks`. `check_grammar` validates feedback-grammar text as
 the therapist types (line and column of the first error) and saves it when asked.
 """
 
@@ -19,6 +20,7 @@ from django.views.decorators.http import require_POST
 from analysis.bvh import read
 from analysis.feedback import Grammar
 from analysis.feedback_grammar import GrammarError
+from analysis.key_pose_suggestions import suggest_key_poses
 from analysis.kinematics import rotations
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
 from webapp.exercises.forms import LandmarksForm
@@ -51,6 +53,7 @@ def annotate_page(request: HttpRequest, pk) -> HttpResponse:
 def tutor_data(request: HttpRequest, pk) -> JsonResponse:
     exercise = get_exercise_for_user(request, pk)
     motion = tutor_motion(exercise)
+    suggestion = suggest_key_poses(motion)
     return JsonResponse(
         {
             "fps": motion.fps,
@@ -61,6 +64,8 @@ def tutor_data(request: HttpRequest, pk) -> JsonResponse:
             "landmark_types": exercise.tutor_landmark_types,
             "type_names": exercise.landmark_type_names,
             "involved_joints": exercise.involved_joints,
+            "suggested_frames": list(suggestion.frames),
+            "suggested_types": list(suggestion.types),
         }
     )
 

@@ -22,6 +22,11 @@
     const top = Math.max(1, ...curve);
     const points = curve.map((a, f) => `${x(f)},${H - PAD - (a / top) * (H - 2 * PAD)}`);
     svg.append(el("polyline", { points: points.join(" "), fill: "none", stroke: "#2563eb" }));
+    // Suggested key poses: dashed and grey, under the therapist's own marks.
+    data.suggested_frames.forEach((frame, i) => {
+      svg.append(el("line", { x1: x(frame), x2: x(frame), y1: PAD, y2: H - PAD, stroke: "#9ca3af",
+        "stroke-dasharray": "4 3", class: "suggested", "data-type": data.suggested_types[i] }));
+    });
     marks.forEach((m, i) => {
       const line = el("line", { x1: x(m.frame), x2: x(m.frame), y1: PAD, y2: H - PAD,
         stroke: i === selected ? "#dc2626" : "#16a34a", "stroke-width": 3, "data-index": i });
@@ -83,6 +88,13 @@
     }
     select.addEventListener("change", draw);
     document.getElementById("save-landmarks").addEventListener("click", save);
+    const accept = document.getElementById("use-suggestions");
+    accept.disabled = data.suggested_frames.length === 0;
+    accept.addEventListener("click", () => {
+      marks = data.suggested_frames.map((frame, i) => ({ frame, type: data.suggested_types[i] }));
+      names = { 1: names[1] || "rest", 2: names[2] || "extreme", ...names };
+      selected = -1; draw();
+    });
     draw();
   }
   load();
