@@ -11,9 +11,11 @@ Public API:
   frame becomes D(f)·q(f). So γ = 0 returns the input,
   γ = 1 puts every landmark pose exactly on its target, and since the rotation distance is
   invariant under a common left factor, the jump between consecutive adjusted frames is at most
-  the input's jump plus the offset's change over one frame, angle(D^γ_k, D^γ_k+1)/(f_k+1 − f_k):
-  no gimbal lock, no flips (only landmarks a few frames apart with very different targets make
-  that change large, and γ = 1 then demands it).
+  the input's jump plus the offset's change over that frame: no gimbal lock, no flips. The offset
+  turns uniformly between landmarks unless that would push a jump the input kept within
+  ``max_jump_deg`` (20°) over it; then its turn is re-timed, as evenly as the caps allow
+  (``water_fill``), into the frames where the input moves slowly. Only landmarks a few frames
+  apart with very different targets leave too little room, and γ = 1 then demands the jump.
   ``method="euler"`` is the paper's version (offsets of Euler angles in the joint's channel
   ``order``, interpolated linearly), kept for comparison; it has the gimbal-lock artefacts of
   ch. 8.2. Two fixes to Alg 13 in both methods: its left-edge offset δ₁ multiplies the already
@@ -48,6 +50,10 @@ from analysis.sync import sample_linear, sample_rotations, synchronise_landmarks
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 Gamma = float | npt.ArrayLike
+# The frame-to-frame rotation jump an adjustment may not newly exceed, and the margin kept below
+# it so that rounding never tips a step over.
+MAX_JUMP_DEG = 20.0
+JUMP_MARGIN_DEG = 1e-3
 
 
 def gamma_vector(
@@ -100,13 +106,67 @@ def _checked(
     return q, f[order], t[order], g
 
 
-def _adjust_rotation(q: FloatArray, f: IntArray, t: FloatArray, g: FloatArray) -> FloatArray:
+def water_fill(capacity: FloatArray, total: float) -> FloatArray:
+    """Split ``total`` over steps as evenly as the per-step ``capacity`` (n,) allows.
+
+    Every step gets min(capacity, λ) with λ chosen so the steps add up to ``total``: the most
+    uniform split that respects the caps. When even the full capacity is short of ``total`` the
+    shortfall is spread evenly on top (the caps cannot all hold; the excess is kept smallest).
+    """
+    n = capacity.shape[0]
+    room = float(capacity.sum())
+    if room <= total:
+        return capacity + (total - room) / n
+    caps = np.sort(capacity)
+    # Filling the k smallest caps completely leaves (total − their sum) for the other n − k steps.
+    filled = np.concatenate(([0.0], np.cumsum(caps)[:-1]))
+    levels = (total - filled) / (n - np.arange(n))
+    k = int(np.argmax(levels <= caps))
+    return np.minimum(capacity, levels[k])
+
+
+def _segment_timing(jumps: FloatArray, turn: float, limit: float) -> FloatArray:
+    """Fractions (n + 1,) from 0 to 1 of an offset turning by ``turn`` degrees over the n
+    transitions whose input jumps are ``jumps`` (n,): uniform when that keeps every jump within
+    ``limit``, else re-timed so that input jump + offset step stays within it where the input
+    was within it (transitions already over the limit take any share)."""
+    n = jumps.shape[0]
+    uniform = np.linspace(0.0, 1.0, n + 1)
+    if turn <= 0.0 or not np.any((jumps <= limit) & (jumps + turn / n > limit)):
+        return uniform
+    capacity = np.where(jumps <= limit, np.maximum(limit - JUMP_MARGIN_DEG - jumps, 0.0), np.inf)
+    steps = water_fill(np.minimum(capacity, turn), turn)
+    fractions = np.concatenate(([0.0], np.cumsum(steps))) / steps.sum()
+    fractions[-1] = 1.0
+    return fractions
+
+
+def _timing(q: FloatArray, f: IntArray, scaled: FloatArray, limit: float | None) -> FloatArray:
+    """Slerp fraction (F, J) of every frame between its bracketing landmarks' offsets."""
+    _, _, w = _brackets(f, len(q))
+    timing = np.repeat(w[:, None], q.shape[1], axis=1)
+    if limit is None:
+        return timing
+    jumps = frame_jumps(q)  # (F − 1, J)
+    turns = quat.angle_between(scaled[:-1], scaled[1:], degrees=True)  # (L − 1, J)
+    for k in range(len(f) - 1):
+        start, stop = int(f[k]), int(f[k + 1])
+        for j in range(q.shape[1]):
+            timing[start : stop + 1, j] = _segment_timing(
+                jumps[start:stop, j], float(turns[k, j]), limit
+            )
+    return timing
+
+
+def _adjust_rotation(
+    q: FloatArray, f: IntArray, t: FloatArray, g: FloatArray, limit: float | None
+) -> FloatArray:
     offsets = quat.to_rotvec(quat.multiply(t, quat.conjugate(q[f])))  # (L, J, 3) radians
     scaled = quat.from_rotvec(offsets * g[None, :, None])  # D^γ = exp(γ·log D)
-    lo, hi, w = _brackets(f, len(q))
-    # Slerp is linear in the rotation group: the offset turns at a constant rate along the
-    # shortest arc, so its largest change per frame is as small as any interpolant allows.
-    field = quat.slerp(scaled[lo], scaled[hi], np.broadcast_to(w[:, None], (len(q), q.shape[1])))
+    lo, hi, _ = _brackets(f, len(q))
+    # Slerp is linear in the rotation group: the offset turns along the shortest arc, by the
+    # share of the turn the timing gives each frame (uniform unless a jump limit needs otherwise).
+    field = quat.slerp(scaled[lo], scaled[hi], _timing(q, f, scaled, limit))
     return quat.multiply(field, q)
 
 
@@ -143,17 +203,20 @@ def adjust(
     method: str = "rotation",
     *,
     order: str | Sequence[str] = "ZXY",
+    max_jump_deg: float | None = MAX_JUMP_DEG,
 ) -> FloatArray:
     """Alg 13 on rotations (see the module docstring): (F, J, 4) → (F, J, 4).
 
     ``landmark_frames`` (L,) frames, ``target_q`` (L, J, 4) the pose each should move toward,
-    ``gamma`` scalar or (J,) in [0, 1]; ``order`` (Euler method only) per joint or for all.
+    ``gamma`` scalar or (J,) in [0, 1]; ``order`` (Euler method only) per joint or for all;
+    ``max_jump_deg`` (rotation method): re-time the offsets so that no frame-to-frame jump the
+    input kept within it goes over it (None: uniform timing).
     """
     q, f, t, g = _checked(local_q, landmark_frames, target_q, gamma)
     if f.size == 0 or not np.any(g > 0):
         return q.copy()
     if method == "rotation":
-        out = _adjust_rotation(q, f, t, g)
+        out = _adjust_rotation(q, f, t, g, max_jump_deg)
     elif method == "euler":
         out = _adjust_euler(q, f, t, g, order)
     else:

@@ -14,6 +14,7 @@ from analysis.adjustment import (
     demonstration_skeletons,
     frame_jumps,
     gamma_vector,
+    water_fill,
 )
 from analysis.assessment import tutor_mean_poses
 from analysis.bvh import read
@@ -121,9 +122,11 @@ def test_ui_prmd_session_toward_the_s01_tutor():
     # (the rotation distance is invariant under a common left factor) ...
     step = frame_jumps(quat.multiply(full, quat.conjugate(q)))
     assert np.all(after <= before + step + 1e-6)
-    assert step.max() < 5.0
-    # ... so no jump above 20° appears where the input moved less than 20° − that change.
-    assert not ((after > JUMP) & (before <= JUMP - step.max())).any()
+    # ... and the offsets are timed so that no jump above 20° appears where the input had none,
+    assert not ((after > JUMP) & (before <= JUMP)).any()
+    # which uniform timing would have broken on this session.
+    uniform = frame_jumps(adjust(q, frames, targets, 1.0, max_jump_deg=None))
+    assert ((uniform > JUMP) & (before <= JUMP)).any()
     # The paper's Euler version makes jumps out of smooth input on the same session.
     euler = adjust(q, frames, targets, 1.0, "euler", order=channel_orders(motion.skeleton))
     assert ((frame_jumps(euler) > JUMP) & (before <= 10.0)).any()
@@ -160,3 +163,38 @@ def test_demonstration_skeletons(synthetic):
     np.testing.assert_allclose(full.tutor[:, 0], full.patient[:, 0])
     with pytest.raises(ValueError, match="tutor_root"):
         demonstration_skeletons(sk, p_perf, t_perf, means, 1.0, tutor_root="floor")
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_water_fill_is_the_most_even_split_within_the_caps(seed):
+    rng = np.random.default_rng(seed)
+    caps = rng.uniform(0.0, 5.0, 30)
+    total = 0.6 * caps.sum()
+    steps = water_fill(caps, total)
+    assert steps.sum() == pytest.approx(total)
+    assert np.all(steps <= caps + 1e-12)
+    # Steps below their cap all share one level, the largest step.
+    free = steps < caps - 1e-12
+    np.testing.assert_allclose(steps[free], steps.max())
+    short = water_fill(caps, caps.sum() + 3.0)  # not enough room: the excess is spread evenly
+    np.testing.assert_allclose(short - caps, 3.0 / 30)
+
+
+def test_a_fast_stretch_between_landmarks_gets_less_of_the_offset():
+    # 19.5° per frame for 10 frames in the middle of a slow segment, and a 60° offset to apply
+    # about the same axis: uniform timing adds 1.2° to every frame's jump.
+    speed = np.r_[np.full(20, 1.0), np.full(10, 19.5), np.full(20, 1.0)]
+    angles = np.r_[0.0, np.cumsum(speed)]
+    q = quat.from_axis_angle("x", np.radians(angles))[:, None]
+    frames = np.array([0, 50])
+    target = quat.multiply(quat.from_axis_angle("x", np.radians([0.0, 60.0]))[:, None], q[frames])
+    before = frame_jumps(q)
+    uniform = frame_jumps(adjust(q, frames, target, 1.0, max_jump_deg=None))
+    assert (uniform > JUMP).any()
+    timed = adjust(q, frames, target, 1.0)
+    assert frame_jumps(timed).max() <= JUMP
+    np.testing.assert_allclose(
+        quat.angle_between(timed[frames], target, degrees=True), 0, atol=1e-9
+    )
+    offset_steps = frame_jumps(quat.multiply(timed, quat.conjugate(q)))[:, 0]
+    assert offset_steps[20:30].max() <= JUMP - before[20:30, 0].min() + 1e-6
