@@ -23,9 +23,10 @@ from analysis.assessment import (
 )
 from analysis.bvh import Motion
 from analysis.kinematics import rotations
+from analysis.pipeline_prepare import mirrored, prepare, progress_signal
 from analysis.posefeatures import flatten, relative_to_start, scaled_positions
-from analysis.scoring import RepetitionScorer, deviations, fit_scorer
-from analysis.segmentation import fit_axis
+from analysis.scoring import RepetitionScorer, fit_scorer, repetition_features
+from analysis.segmentation import ProgressAxis, fit_axis
 
 FloatArray = npt.NDArray[np.float64]
 SCORING_FPS = 30.0
@@ -109,11 +110,11 @@ def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
     # Scores compare shapes of movement: 30 frames a second are plenty, and DTW costs n × m.
     step = max(1, round(tutor.fps / SCORING_FPS))
     coarse = [t[::step] for t in tutor_templates]
-    labelled = training_deviations(training, coarse, [names[j] for j in scored], step)
+    side = {"axis": axis, "mirror": mirror_permutation(names)}
+    labelled = training_deviations(training, coarse, scored, step, tutor, side)
     scorer = fit_scorer(coarse, labelled)
     components = {
-        "axis": axis,
-        "mirror": mirror_permutation(names),
+        **side,
         "involved_index": involved_idx,
         "scored_index": scored,
         "templates": tutor_templates,
@@ -150,21 +151,30 @@ def assessment_parts(
     return {"mean_poses": means, "assessor": assessor}
 
 
-def training_deviations(
+def training_deviations(  # noqa: PLR0917 (the scoring set-up the pipeline uses)
     training: Sequence[TrainingRecording],
     tutor_templates: list[FloatArray],
-    joints: list[str],
-    step: int = 1,
+    scored: list[int],
+    step: int,
+    tutor: Motion,
+    side: dict[str, Any],
 ) -> list[tuple[FloatArray, bool]]:
-    """(deviation vector, is correct) for every repetition of the labelled recordings."""
+    """(repetition features, is correct) for every repetition of the labelled recordings, prepared
+    as the pipeline prepares a recording: at the tutor's frame rate, and mirrored when the patient
+    did a one-sided exercise with the other side (as the pipeline scores them)."""
+    axis: ProgressAxis = side["axis"]
     out: list[tuple[FloatArray, bool]] = []
     for item in training:
-        names = item.motion.skeleton.names
-        feats = flatten(scaled_positions(item.motion, [names.index(n) for n in joints]))
+        prepared = prepare(item.motion, tutor.skeleton.names, tutor.fps, axis.rep_frames)
+        _, use_mirror = progress_signal(prepared, side)
+        points = mirrored(prepared.points, side["mirror"]) if use_mirror else prepared.points
+        feats = flatten(points[:, scored])
         correct = item.label in ("correct", "1")
-        for a, b in tutor_repetitions(item.landmark_frames, item.landmark_types):
+        rate = prepared.motion.fps / item.motion.fps  # landmarks are frames of the file as given
+        for first, last in tutor_repetitions(item.landmark_frames, item.landmark_types):
+            a, b = round(first * rate), round(last * rate)
             segment = relative_to_start(feats[a : b + 1])[::step]
-            out.append((deviations(segment, tutor_templates), correct))
+            out.append((repetition_features(segment, tutor_templates), correct))
     return out
 
 

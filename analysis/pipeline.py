@@ -12,7 +12,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -20,7 +20,7 @@ import numpy.typing as npt
 
 from analysis.bvh import Motion
 from analysis.model import ExerciseModel
-from analysis.pipeline_prepare import prepare, progress_signal
+from analysis.pipeline_prepare import mirrored, prepare, progress_signal
 from analysis.pipeline_stages import (
     assess_landmarks,
     feedback_items,
@@ -88,7 +88,11 @@ def analyse(
         segments = segment(progress, parts["axis"].rep_frames)
         landmarks = label_landmarks(prepared, segments, model)
     with timer("scores"):
-        repetitions = repetition_results(prepared, segments, progress, model)
+        # scored as the tutor's side when the patient used the other one
+        scored = prepared
+        if used_mirror:
+            scored = replace(prepared, points=mirrored(prepared.points, parts["mirror"]))
+        repetitions = repetition_results(scored, segments, progress, model)
     with timer("assessment"):
         assessment = assess_landmarks(prepared, landmarks, model)
     with timer("feedback"):

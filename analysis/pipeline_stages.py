@@ -19,7 +19,7 @@ from analysis.model import ExerciseModel
 from analysis.performance_level import update_levels
 from analysis.pipeline_prepare import Prepared
 from analysis.posefeatures import flatten, range_of_motion, relative_to_start
-from analysis.scoring import deviations
+from analysis.scoring import repetition_features
 from analysis.segmentation import Segments
 
 FloatArray = npt.NDArray[np.float64]
@@ -60,12 +60,13 @@ def repetition_results(
     out = []
     for start, end, peak in zip(segments.starts, segments.ends, segments.peaks, strict=True):
         segment = relative_to_start(movement[start : end + 1])
-        dev = deviations(segment[::step], [t[::step] for t in parts["templates"]])
+        features = repetition_features(segment[::step], [t[::step] for t in parts["templates"]])
+        dev = features[: len(parts["scored_index"])]
         reach = float(progress[peak] - progress[start])
         tempo = (end - start + 1) / tutor_frames
         out.append({
             "start": int(start), "end": int(end), "peak": int(peak),
-            "score": round(parts["scorer"].score(dev), 2),
+            "score": round(parts["scorer"].score(features), 2),
             "deviation": round(float(dev.mean()), 5), "reach": round(reach, 3),
             "tempo": round(float(tempo), 3), "guidance": guidance_for(tempo, reach),
         })  # fmt: skip

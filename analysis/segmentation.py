@@ -2,10 +2,25 @@
 
 The tutor's movement relative to its starting pose is summarised by its first principal component:
 the *progress* signal rises from the start pose to the end of range and falls back. Projecting a
-patient's pose features on the same axis gives their progress signal; each prominent peak is one
-repetition's end of range and the lowest point between two peaks is where one repetition ends and
-the next begins. Peak distance and prominence come from the tutor's own tempo and range, relaxed so
-that slower patients and a reduced range of motion still count.
+patient's pose features on the same axis gives their progress signal, in tutor units (0 at the
+tutor's start pose, about 1 at its end of range).
+
+Repetitions are the signal's peaks that stand out twice over: by at least `MIN_PROMINENCE` tutor
+units (so sensor jitter in a rest pose never counts, whatever the patient's range), and by at least
+`RELATIVE_PROMINENCE` of their own height above the recording's rest level (so a patient who only
+half returns between two humps of one repetition, as in sit-to-stand, is not counted twice, while
+a patient with a small range still is). A median filter first removes the one-frame spikes of
+optical and depth sensors, and the recording's ends are padded with its rest level so that a
+repetition cut off by the end of the recording still counts.
+
+A repetition *starts* in the middle of the rest before it: between the frame where the previous
+repetition is back near rest (within `REST_FRACTION` of the lower of the two peaks above the
+trough) and the frame where this one leaves it. That is where a person cutting a recording into
+repetitions by hand puts the cut (the UI-PRMD episode boundaries sit there: within ±5 frames for
+95 % of them, against 70 % for the lowest point of the trough), and it does not move with where
+in a flat rest the signal's noise happens to be lowest. The first repetition starts, and the last
+ends, half of the recording's typical rest (measured between its repetitions) away from their own
+movement, clipped to the recording.
 """
 
 from __future__ import annotations
@@ -15,10 +30,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from scipy.signal import find_peaks
+from scipy.signal import find_peaks, medfilt
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
+
+MIN_PROMINENCE = 0.12  # tutor units: 12 % of the tutor's range of movement
+RELATIVE_PROMINENCE = 0.45  # of a peak's height above the rest level
+MIN_SPACING = 0.45  # of the tutor's repetition length between two peaks
+REST_FRACTION = 0.3  # of the peak's height above the trough: still resting below this
+REST_PERCENTILE = 5.0  # the recording's rest level: this percentile of the smoothed signal
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,36 +87,87 @@ def _smooth(signal: FloatArray, width: int) -> FloatArray:
     return np.convolve(padded, kernel / kernel.sum(), mode="same")[width:-width]
 
 
-def segment(progress: FloatArray, rep_frames: float, min_range: float = 0.3) -> Segments:
+def clean_progress(progress: FloatArray, rep_frames: float) -> FloatArray:
+    """The progress signal without one-frame spikes (median filter) and smoothed (Hann window),
+    both about an eighth / a twelfth of a repetition wide."""
+    half = max(int(rep_frames / 8), 0)
+    despiked = medfilt(progress, 2 * half + 1) if progress.size > 2 * half + 1 else progress
+    return _smooth(despiked, max(int(rep_frames / 12), 1))
+
+
+def find_repetition_peaks(height: FloatArray, rep_frames: float) -> IntArray:
+    """End-of-range frames: peaks of ``height`` (signal above the rest level) that stand out by
+    `MIN_PROMINENCE` and by `RELATIVE_PROMINENCE` of their height, `MIN_SPACING` apart."""
+    pad = max(int(rep_frames / 4), 1)
+    padded = np.pad(height, pad, mode="constant", constant_values=min(float(height.min()), 0.0))
+    peaks, props = find_peaks(
+        padded, distance=max(int(MIN_SPACING * rep_frames), 1), prominence=MIN_PROMINENCE
+    )
+    # a peak on the first or last frame moves one frame in, so a repetition's start, peak and end
+    # stay three distinct frames (landmarks must be)
+    peaks = np.clip(peaks - pad, 1, max(height.size - 2, 1))
+    keep = props["prominences"] >= RELATIVE_PROMINENCE * np.maximum(height[peaks], 1e-9)
+    return np.unique(peaks[keep]).astype(np.int64)
+
+
+def segment(progress: FloatArray, rep_frames: float) -> Segments:
     """Cut a progress signal into repetitions (see the module docstring)."""
-    smooth = _smooth(progress, max(int(rep_frames / 12), 1))
-    span = float(np.percentile(smooth, 98) - np.percentile(smooth, 2)) if smooth.size else 0.0
-    prominence = max(min_range * span, 0.15)
-    peaks, _ = find_peaks(smooth, distance=max(int(0.45 * rep_frames), 1), prominence=prominence)
+    if progress.size == 0:
+        return _no_segments()
+    smooth = clean_progress(np.asarray(progress, dtype=np.float64), rep_frames)
+    height = smooth - float(np.percentile(smooth, REST_PERCENTILE))
+    peaks = find_repetition_peaks(height, rep_frames)
     if peaks.size == 0:
-        empty = np.zeros(0, dtype=np.int64)
-        return Segments(empty, empty, empty)
-    cuts = [int(np.argmin(smooth[a:b])) + a for a, b in itertools.pairwise(peaks)]
-    first = _boundary_before(smooth, int(peaks[0]), rep_frames)
-    last = _boundary_after(smooth, int(peaks[-1]), rep_frames)
+        return _no_segments()
+    cuts = [middle_of_rest(height, int(a), int(b)) for a, b in itertools.pairwise(peaks)]
+    lead = half_rest(height, cuts, peaks, rep_frames)
+    first = min(max(0, leaves_rest(height, int(peaks[0])) - lead), int(peaks[0]) - 1)
+    last = back_at_rest(height, int(peaks[-1])) + lead
+    last = max(min(height.size - 1, last), int(peaks[-1]) + 1)
     starts = np.array([first, *cuts], dtype=np.int64)
     ends = np.array([*(c - 1 for c in cuts), last], dtype=np.int64)
-    return Segments(starts, np.maximum(ends, starts), peaks.astype(np.int64))
+    return Segments(starts, np.maximum(ends, starts), peaks)
 
 
-def _boundary_before(signal: FloatArray, peak: int, rep_frames: float) -> int:
-    """Where the first repetition leaves the rest pose: the last low point before its peak."""
-    lo = max(0, peak - int(1.5 * rep_frames))
-    window = signal[lo : peak + 1]
-    floor = window.min() + 0.02 * (signal[peak] - window.min())
-    below = np.flatnonzero(window <= floor)
-    return lo + int(below[-1]) if below.size else lo
+def half_rest(signal: FloatArray, cuts: list[int], peaks: IntArray, rep_frames: float) -> int:
+    """The recording's typical half rest: median frames from a cut to the next movement onset
+    (a sixth of the tutor's repetition when there is no cut to measure)."""
+    if not cuts:
+        return int(rep_frames / 6)
+    gaps = [
+        leaves_rest(signal[cut:], int(peak) - cut)
+        for cut, peak in zip(cuts, peaks[1:], strict=True)
+    ]
+    return int(np.median(gaps))
 
 
-def _boundary_after(signal: FloatArray, peak: int, rep_frames: float) -> int:
-    """Where the last repetition is back at rest: the first low point after its peak."""
-    hi = min(signal.size, peak + int(1.5 * rep_frames) + 1)
-    window = signal[peak:hi]
-    floor = window.min() + 0.02 * (signal[peak] - window.min())
-    below = np.flatnonzero(window <= floor)
-    return peak + int(below[0]) if below.size else hi - 1
+def _no_segments() -> Segments:
+    empty = np.zeros(0, dtype=np.int64)
+    return Segments(empty, empty, empty)
+
+
+def middle_of_rest(signal: FloatArray, peak_a: int, peak_b: int) -> int:
+    """The frame halfway between the end of the return from ``peak_a`` and the start of the
+    movement to ``peak_b``: the first and last frames between them that are within
+    `REST_FRACTION` of the lower peak's height above the trough."""
+    between = signal[peak_a : peak_b + 1]
+    low = float(between.min())
+    threshold = low + REST_FRACTION * (min(signal[peak_a], signal[peak_b]) - low)
+    resting = np.flatnonzero(between <= threshold)
+    return peak_a + int(resting[0] + resting[-1] + 1) // 2
+
+
+def leaves_rest(signal: FloatArray, peak: int) -> int:
+    """The last frame before ``peak`` within `REST_FRACTION` of its rise (the movement onset)."""
+    before = signal[: peak + 1]
+    low = float(before.min())
+    resting = np.flatnonzero(before <= low + REST_FRACTION * (signal[peak] - low))
+    return int(resting[-1])
+
+
+def back_at_rest(signal: FloatArray, peak: int) -> int:
+    """The first frame after ``peak`` within `REST_FRACTION` of its fall (the return's end)."""
+    after = signal[peak:]
+    low = float(after.min())
+    resting = np.flatnonzero(after <= low + REST_FRACTION * (signal[peak] - low))
+    return peak + int(resting[0])
