@@ -20,6 +20,10 @@ configuration on UI-PRMD, `FAITHFUL` the thesis's C4.5 + AdaBoost + EM + μ1.
 
     model = LandmarkModel().fit(tutor_motion, tutor_frames, tutor_types, training=[...])
     result = model.detect(motion)            # LandmarkResult; result.landmarks → periodic.clean
+    reps = landmark_repetitions(model, motion).repetitions   # detect → GA^K → repetitions
+
+`landmark_repetitions` is the entry point for segmentation (`analysis.segmentation` and the
+pipeline): repetitions (start, end-of-range frames, end, complete) from key poses.
 """
 
 from __future__ import annotations
@@ -41,17 +45,21 @@ from sklearn.tree import DecisionTreeClassifier
 
 from analysis.bvh import Motion
 from analysis.features import frame_features
+from analysis.periodic import clean
 from analysis.refining import (
     Candidates,
     GrammarOptions,
     RefineOptions,
     farthest_types,
     mean_poses,
+    pose_distances,
     refine,
     regularise,
     relocate,
     transitions,
+    typical_gaps,
 )
+from analysis.repetitions import Repetition, repetitions
 from analysis.signature import MotionSignature, SignatureOptions, augmented_copies, pose_series
 
 FloatArray = npt.NDArray[np.float64]
@@ -254,7 +262,10 @@ class LandmarkOptions:
 
     grammar: None = no grammar-constrained typing; relocate: move landmarks of types that the
     training data shows at the farthest pose from the preceding landmark there; augment: warped
-    tutor copies added to the training data when no labelled recordings are given.
+    tutor copies added to the training data when no labelled recordings are given; side (ours,
+    with ``signature.mirror``): choose the straight or mirrored performance by the variance the
+    tutor's eigenspace captures ("variance"), or detect on both and keep the side whose final
+    landmarks sit closer to the tutor's mean poses of their types ("landmarks", twice the cost).
     """
 
     signature: SignatureOptions = field(default_factory=lambda: OURS_SIGNATURE)
@@ -270,6 +281,7 @@ class LandmarkOptions:
     grammar: GrammarOptions | None = field(default_factory=GrammarOptions)
     relocate: bool = True
     augment: int = 4
+    side: Literal["variance", "landmarks"] = "variance"
     seed: int = 0
 
 
@@ -341,7 +353,8 @@ class LandmarkModel(BaseEstimator):
     plus optional labelled recordings ``(motion, frames, types)``; without them the classifier
     trains on the tutor and ``options.augment`` warped copies. ``detect(motion)`` →
     `LandmarkResult`. Learnt: ``signature_``, ``detector_``, ``means_`` (tutor mean signature per
-    type, eq 5.30), ``allowed_`` (type transitions), ``extreme_types_``, ``cycle_``, ``patterns_``
+    type, eq 5.30), ``allowed_`` (type transitions), ``gaps_`` (typical frames between
+    consecutive types, for the grammar's tempo prior), ``extreme_types_``, ``cycle_``, ``patterns_``
     (training periods for `analysis.periodic.clean`).
     """
 
@@ -386,6 +399,7 @@ class LandmarkModel(BaseEstimator):
         self.patterns_ = [[*self.cycle_, self.cycle_[0]]]
         n_types = max(int(np.max(t)) for _, _, t in labelled)
         self.allowed_ = transitions([t for _, _, t in labelled], n_types)
+        self.gaps_ = typical_gaps([(f, t) for _, f, t in labelled], n_types)
         self.extreme_types_ = set()
         if self.options.relocate:
             poses = [(pose_series(m), np.asarray(f), np.asarray(t)) for m, f, t in labelled]
@@ -394,13 +408,89 @@ class LandmarkModel(BaseEstimator):
 
     def detect(self, motion: Motion) -> LandmarkResult:
         """Candidate, refined and final landmarks of one performance (same fps as the tutor)."""
-        mirrored = self.signature_.options.mirror and self.signature_.mirrored(motion)
+        if not self.signature_.options.mirror:
+            return self._detect_side(motion, False)
+        if self.options.side == "landmarks":
+            sides = [self._detect_side(motion, m) for m in (False, True)]
+            return min(sides, key=self._misfit)
+        return self._detect_side(motion, self.signature_.mirrored(motion))
+
+    def _misfit(self, result: LandmarkResult) -> float:
+        """Mean distance of the final landmarks to their types' tutor mean signatures (inf if
+        none): how well a side's key poses look like the tutor's."""
+        found = result.landmarks
+        if found.frames.size == 0:
+            return float("inf")
+        width = int(max(self.means_)) + 1
+        distances = pose_distances(result.signature, self.means_, width)
+        return float(np.mean(distances[found.frames, found.types]))
+
+    def _detect_side(self, motion: Motion, mirrored: bool) -> LandmarkResult:
         sig = self.signature_.project(self.signature_.smoothed(motion, mirrored))
         candidates = self.detector_.candidates(sig)
         refined = refine(candidates, sig, self.means_, self.options.refine)
         final = refined
         if self.options.grammar is not None:
-            final = regularise(final, sig, self.means_, self.allowed_, self.options.grammar)
+            final = regularise(
+                final, sig, self.means_, self.allowed_, self.options.grammar, gaps=self.gaps_
+            )
         if self.extreme_types_:
             final = relocate(final, pose_series(motion), self.extreme_types_)
         return LandmarkResult(candidates, refined, final, sig, bool(mirrored))
+
+
+def periodic_landmarks(
+    landmarks: Candidates, patterns: Sequence[Sequence[int]], method: str = "ga-k", seed: int = 0
+) -> Candidates:
+    """Chapter 6 on detected landmarks: keep the members `analysis.periodic.clean` keeps.
+
+    patterns: training periods (``LandmarkModel.patterns_``, e.g. [[1, 2, 1]]); method: one of
+    `analysis.periodic.METHODS` (GA^K by default). Returns the kept landmarks, in time order.
+    """
+    if landmarks.frames.size == 0:
+        return landmarks
+    kept = np.asarray(
+        clean([int(t) for t in landmarks.types], patterns, method=method, seed=seed), np.int64
+    )
+    return Candidates(landmarks.frames[kept], landmarks.types[kept])
+
+
+@dataclass(frozen=True)
+class RepetitionResult:
+    """Everything `landmark_repetitions` found in one performance: the detection stages
+    (``detection``), the landmarks after periodic analysis (``landmarks``) and the repetitions
+    (`analysis.repetitions.Repetition`: start, end-of-range frames, end, complete, cycle)."""
+
+    detection: LandmarkResult
+    landmarks: Candidates
+    repetitions: list[Repetition]
+
+
+def landmark_repetitions(
+    model: LandmarkModel,
+    motion: Motion,
+    *,
+    method: str | None = "ga-k",
+    order: Sequence[int] | Sequence[Sequence[int]] | None = None,
+    seed: int = 0,
+) -> RepetitionResult:
+    """Entry point for segmentation (item 7 of issue 4): repetitions of a performance from its key
+    poses — `LandmarkModel.detect`, periodic sequence analysis (`periodic_landmarks`, skipped when
+    ``method`` is None), then `analysis.repetitions.repetitions` with the tutor's cycle.
+
+    model: a fitted `LandmarkModel` of the exercise; motion: the performance (the tutor's fps).
+    order: the cycles of `analysis.repetitions` (default ``model.cycle_``, e.g. [1, 2]); give one
+    cycle per side (``[[1, 2], [3, 4]]``) when the tutor's landmarks have a type set per side, and
+    repetitions are matched by type so patients may do the sides in another order. Incomplete
+    repetitions (missing start or end of range, cut short by the recording's end) and extra ones
+    beyond the tutor's count are all returned.
+    """
+    found = model.detect(motion)
+    kept = found.landmarks
+    if method is not None:
+        kept = periodic_landmarks(kept, model.patterns_, method, seed)
+    cycles = order if order is not None else model.cycle_
+    reps = repetitions(
+        kept.frames.tolist(), kept.types.tolist(), cycles, last_frame=motion.n_frames - 1
+    )
+    return RepetitionResult(found, kept, reps)

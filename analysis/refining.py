@@ -272,13 +272,41 @@ class GrammarOptions:
 
     retype: cost of giving a landmark another type than the classifier's; delete: cost of dropping
     one; insert: cost of adding a missing landmark between two kept ones (plus its pose cost);
-    lookback: how many landmarks in a row may be dropped at most.
+    lookback: how many landmarks in a row may be dropped at most; tempo, short: the tempo prior
+    (`tempo_costs`, 0 = off), used when `regularise` is given the training's typical gaps.
     """
 
     retype: float = 0.5
     delete: float = 2.0
     insert: float = 0.5
     lookback: int = 4
+    tempo: float = 0.0
+    short: float = 0.5
+
+
+def typical_gaps(samples: list[tuple[npt.ArrayLike, npt.ArrayLike]], n_types: int) -> FloatArray:
+    """Median frames from a landmark of type a (row) to the next one of type b (column) in the
+    training sequences [(frames, types)]: (T + 1, T + 1), 0 where the pair was never seen."""
+    seen: dict[tuple[int, int], list[int]] = {}
+    for frames, types in samples:
+        f, t = np.asarray(frames, dtype=np.int64), np.asarray(types, dtype=np.int64)
+        for k in range(1, f.size):
+            seen.setdefault((int(t[k - 1]), int(t[k])), []).append(int(f[k] - f[k - 1]))
+    out = np.zeros((n_types + 1, n_types + 1))
+    for (a, b), gaps in seen.items():
+        out[a, b] = float(np.median(gaps))
+    return out
+
+
+def tempo_costs(gap: float, gaps: FloatArray, options: GrammarOptions) -> FloatArray:
+    """Cost (width, width) of two consecutive landmarks ``gap`` frames apart, by their types:
+    tempo · (1 − gap / (short · typical gap)) when shorter than ``short`` times the typical gap,
+    else 0 (ours: a repetition far quicker than any in training is more likely a pause's jitter
+    read as key poses than a real one)."""
+    limit = options.short * gaps
+    with np.errstate(divide="ignore", invalid="ignore"):
+        shortfall = np.where(limit > 0, 1.0 - gap / limit, 0.0)
+    return options.tempo * np.clip(shortfall, 0.0, 1.0)
 
 
 def pose_distances(signature: FloatArray, means: dict[int, FloatArray], width: int) -> FloatArray:
@@ -333,6 +361,7 @@ class _Lattice:
     options: GrammarOptions
     best: FloatArray
     back: npt.NDArray[np.int64]
+    gaps: FloatArray | None = None  # (width, width) typical gaps for the tempo prior
 
 
 def _relax(lat: _Lattice, j: int, k: int) -> None:
@@ -341,6 +370,14 @@ def _relax(lat: _Lattice, j: int, k: int) -> None:
     direct = np.where(lat.allowed, 0.0, np.inf)
     span = (int(lat.frames[j]), int(lat.frames[k]))
     via, kind, where = _bridges(lat.distances, span, lat.allowed, lat.options.insert)
+    if lat.gaps is not None and lat.options.tempo > 0:
+        gap = float(span[1] - span[0])
+        direct = direct + tempo_costs(gap, lat.gaps, lat.options)
+        # a bridged pair a → σ → b: half the span on each side of the inserted landmark
+        half = tempo_costs(gap / 2.0, lat.gaps, lat.options)
+        sigma = np.maximum(kind, 0)
+        before, after = np.indices(kind.shape)
+        via = via + np.where(kind >= 0, half[before, sigma] + half[sigma, after], 0.0)
     total = lat.best[j][:, None] + np.minimum(direct, via) + lat.options.delete * (k - j - 1)
     src, cols = np.argmin(total, axis=0), np.arange(width)
     value = total[src, cols] + lat.cost[k]
@@ -363,6 +400,8 @@ def regularise(
     means: dict[int, FloatArray],
     allowed: npt.NDArray[np.bool_],
     options: GrammarOptions = GrammarOptions(),
+    *,
+    gaps: FloatArray | None = None,
 ) -> Candidates:
     """Keep, (re)type and complete refined landmarks so consecutive types follow ``allowed``.
 
@@ -371,6 +410,8 @@ def regularise(
     cost) per landmark inserted between two kept ones where the grammar needs one (at the frame
     closest to that type's tutor mean). A repetition's end of range detected as a start becomes an
     end of range again, and a missed one is put back, instead of a start being dropped.
+    gaps: `typical_gaps` of the training sequences, for the tempo prior (+ `tempo_costs` per
+    pair of consecutive kept landmarks) when ``options.tempo`` > 0.
     """
     n, width = landmarks.frames.size, allowed.shape[0]
     if n == 0:
@@ -380,7 +421,7 @@ def regularise(
     cost = pose_costs(distances[landmarks.frames]) + options.retype * retyped
     best = cost + options.delete * np.arange(n)[:, None]  # k as the first kept landmark
     back = np.full((n, width, 4), -1, dtype=np.int64)
-    lat = _Lattice(landmarks.frames, cost, distances, allowed, options, best, back)
+    lat = _Lattice(landmarks.frames, cost, distances, allowed, options, best, back, gaps)
     for k in range(1, n):
         for j in range(max(0, k - options.lookback - 1), k):
             _relax(lat, j, k)

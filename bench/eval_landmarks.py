@@ -29,6 +29,7 @@ import platform
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -36,9 +37,15 @@ from analysis.bvh import Motion, read
 from analysis.dtw import DTWOptions, align
 from analysis.kinematics import normalised_positions
 from analysis.landmark_eval import Confusion, compromise_intervals, confusion
-from analysis.landmarks import FAITHFUL, LandmarkModel, LandmarkOptions, tutor_cycle
-from analysis.periodic import clean
-from analysis.refining import Candidates, GrammarOptions, refine
+from analysis.landmarks import (
+    FAITHFUL,
+    ClassifierName,
+    LandmarkModel,
+    LandmarkOptions,
+    periodic_landmarks,
+    tutor_cycle,
+)
+from analysis.refining import Candidates, Clustering, GrammarOptions, Selection, refine
 from analysis.repetitions import repetitions
 from analysis.signature import MotionSignature
 
@@ -142,13 +149,12 @@ def _score(s: Session, c: Candidates) -> Confusion:
 
 def periodic_clean(c: Candidates, patterns: list[list[int]]) -> Candidates:
     """Chapter 6 (analysis.periodic.clean, GA^K): drop out-of-sequence landmarks."""
-    kept = np.asarray(clean([int(t) for t in c.types], patterns, method="ga-k", seed=0), np.int64)
-    return Candidates(c.frames[kept], c.types[kept])
+    return periodic_landmarks(c, patterns, method="ga-k", seed=0)
 
 
 def count_repetitions(c: Candidates, cycle: list[int], n_frames: int) -> int:
     """Repetitions in a landmark sequence (analysis.repetitions, every one it returns)."""
-    return len(repetitions(c.frames, c.types, cycle, last_frame=n_frames - 1))
+    return len(repetitions(c.frames.tolist(), c.types.tolist(), cycle, last_frame=n_frames - 1))
 
 
 def run_session(config: Config, model: LandmarkModel, s: Session) -> Outcome:
@@ -284,8 +290,11 @@ def summary_row(name: str, protocol: str, outcomes: list[Outcome]) -> str:
     )
 
 
-GRID_COLUMNS = [(c, ab) for c in ("c45", "nb", "svm") for ab in (False, True)]
-GRID_ROWS = [(cl, se) for cl in ("em", "kmeans", "tc") for se in ("mu1", "mu2")]
+CLASSIFIERS: tuple[ClassifierName, ...] = ("c45", "nb", "svm")
+CLUSTERINGS: tuple[Clustering, ...] = ("em", "kmeans", "tc")
+SELECTIONS: tuple[Selection, ...] = ("mu1", "mu2")
+GRID_COLUMNS = [(c, ab) for c in CLASSIFIERS for ab in (False, True)]
+GRID_ROWS = [(cl, se) for cl in CLUSTERINGS for se in SELECTIONS]
 
 
 def grid_scores(data: dict[str, list[Session]], subjects: tuple[str, ...]) -> dict[tuple, list]:
@@ -371,14 +380,16 @@ def with_overrides(options: LandmarkOptions, settings: list[str]) -> LandmarkOpt
     signature.FIELD, refine.FIELD or grammar.FIELD."""
     for item in settings:
         key, text = item.split("=", 1)
+        value: Any
         try:
             value = ast.literal_eval(text)
         except (ValueError, SyntaxError):
             value = text
         if "." in key:
             outer, inner = key.split(".", 1)
-            nested = getattr(options, outer) or GrammarOptions()
-            options = replace(options, **{outer: replace(nested, **{inner: value})})
+            nested: Any = getattr(options, outer) or GrammarOptions()
+            changed: dict[str, Any] = {outer: replace(nested, **{inner: value})}
+            options = replace(options, **changed)
         elif key == "grammar" and value is None:
             options = replace(options, grammar=None)
         else:

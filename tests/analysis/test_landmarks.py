@@ -14,11 +14,14 @@ from analysis.landmarks import (
     LandmarkModel,
     LandmarkOptions,
     frame_types,
+    landmark_repetitions,
     make_classifier,
+    periodic_landmarks,
     training_frames,
     training_observations,
     tutor_cycle,
 )
+from analysis.refining import Candidates
 from analysis.signature import pose_series
 from analysis.synthetic import SyntheticConfig, generate
 
@@ -160,11 +163,13 @@ def test_model_from_the_tutor_alone_finds_a_patients_key_poses(synthetic):
     assert result.refined.frames.size <= result.candidates.frames.size
 
 
-def test_model_handles_the_other_side(synthetic):
-    tutor, _, other_side = synthetic
-    model = LandmarkModel(options=LandmarkOptions(augment=0))
+@pytest.mark.parametrize("side", ["variance", "landmarks"])
+def test_model_handles_the_other_side(synthetic, side):
+    tutor, patient, other_side = synthetic
+    model = LandmarkModel(options=LandmarkOptions(augment=0, side=side))
     model.fit(tutor.motion, tutor.truth.landmark_frames, tutor.truth.landmark_types)
     assert _check(model, other_side).mirrored
+    assert not model.detect(patient.motion).mirrored
 
 
 def test_the_faithful_configuration_runs_with_training_recordings(synthetic):
@@ -186,3 +191,36 @@ def test_bad_tutor_landmarks_are_refused(synthetic, frames, types):
     tutor = synthetic[0]
     with pytest.raises(ValueError, match="landmark"):
         LandmarkModel().fit(tutor.motion, frames, types)
+
+
+def test_periodic_landmarks_drop_an_out_of_sequence_member():
+    # a three-pose cycle 1 → 2 → 3 → 1 with a 3 detected too early in the second repetition
+    found = Candidates(np.arange(0, 80, 10), np.array([1, 2, 3, 1, 3, 2, 3, 1]))
+    kept = periodic_landmarks(found, [[1, 2, 3, 1]])
+    assert kept.types.tolist() == [1, 2, 3, 1, 2, 3, 1]
+    assert kept.frames.tolist() == [0, 10, 20, 30, 50, 60, 70]
+    empty = Candidates(np.zeros(0, np.int64), np.zeros(0, np.int64))
+    assert periodic_landmarks(empty, [[1, 2, 3, 1]]).frames.size == 0
+
+
+def test_repetitions_from_a_patients_landmarks(synthetic):
+    tutor, patient, _ = synthetic  # the tutor does 4 repetitions, the patient 5
+    model = LandmarkModel(options=LandmarkOptions(augment=2))
+    model.fit(tutor.motion, tutor.truth.landmark_frames, tutor.truth.landmark_types)
+    result = landmark_repetitions(model, patient.motion)
+    reps = result.repetitions
+    assert len(reps) == patient.truth.rep_starts.size == 5 and all(r.complete for r in reps)
+    assert np.abs([r.start for r in reps] - patient.truth.rep_starts).max() <= 4
+    assert result.landmarks.frames.size <= result.detection.landmarks.frames.size
+
+
+def test_repetitions_of_a_cut_recording_end_incomplete(synthetic):
+    tutor, patient, _ = synthetic
+    model = LandmarkModel(options=LandmarkOptions(augment=2))
+    model.fit(tutor.motion, tutor.truth.landmark_frames, tutor.truth.landmark_types)
+    truth = patient.truth
+    cut = int(truth.landmark_frames[-2]) + 3  # just after the last end of range
+    reps = landmark_repetitions(
+        model, patient.motion.with_frames(patient.motion.frames[:cut]), method=None
+    ).repetitions
+    assert len(reps) == 5 and not reps[-1].complete and reps[-1].end == cut - 1

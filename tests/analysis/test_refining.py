@@ -1,6 +1,7 @@
 """Landmark refining (thesis 004, 5.5, eqs 5.27–5.33) and our grammar and relocation steps."""
 
 import numpy as np
+import pytest
 
 from analysis.refining import (
     Candidates,
@@ -16,8 +17,10 @@ from analysis.refining import (
     regularise,
     relocate,
     select,
+    tempo_costs,
     temporal_clusters,
     transitions,
+    typical_gaps,
 )
 
 
@@ -189,3 +192,29 @@ def test_grammar_keeps_a_valid_sequence_unchanged():
     c = cands([0, 5, 10], [1, 2, 1])
     out = regularise(c, _ramp_signature(), FAR, GRAMMAR)
     assert (out.frames.tolist(), out.types.tolist()) == ([0, 5, 10], [1, 2, 1])
+
+
+def test_typical_gaps_are_medians_per_type_pair():
+    gaps = typical_gaps([([0, 10, 30, 40], [1, 2, 1, 2]), ([0, 14, 20], [1, 2, 1])], 2)
+    assert gaps[1, 2] == 10.0 and gaps[2, 1] == 13.0  # medians of (10, 10, 14) and (20, 6)
+    assert gaps[1, 1] == 0.0 and gaps.shape == (3, 3)
+
+
+def test_tempo_cost_grows_as_a_gap_falls_below_its_share_of_the_typical_one():
+    gaps = np.array([[0.0, 0.0], [0.0, 20.0]])
+    options = GrammarOptions(tempo=4.0, short=0.5)  # costly below 10 frames
+    assert tempo_costs(12.0, gaps, options)[1, 1] == 0.0
+    assert tempo_costs(5.0, gaps, options)[1, 1] == pytest.approx(2.0)
+    assert tempo_costs(0.0, gaps, options)[1, 1] == pytest.approx(4.0)
+    assert np.all(tempo_costs(0.0, gaps, options)[0] == 0.0)  # never seen: no prior
+
+
+def test_tempo_prior_drops_a_repetition_far_quicker_than_training():
+    frames, types = [0, 20, 40, 43, 46, 66, 86], [1, 2, 1, 2, 1, 2, 1]
+    sig = np.zeros((87, 1))
+    sig[[20, 43, 66], 0] = 3.0  # every landmark sits exactly at its type's pose
+    gaps = typical_gaps([(frames[:3], types[:3])], 2)  # 20 frames each way
+    plain = regularise(cands(frames, types), sig, FAR, GRAMMAR, GrammarOptions(), gaps=gaps)
+    assert plain.frames.tolist() == frames  # tempo 0: a valid sequence stays as it is
+    out = regularise(cands(frames, types), sig, FAR, GRAMMAR, GrammarOptions(tempo=4.0), gaps=gaps)
+    assert out.types.tolist() == [1, 2, 1, 2, 1] and 43 not in out.frames.tolist()
