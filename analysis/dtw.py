@@ -40,11 +40,12 @@ it is re-scored by paper 001 eq 17: a run of frames of one sequence matched to a
 the other counts once, with their mean frame.
 
 Fast paths (numba, in ``analysis.dtw_kernels``) are chosen automatically: local costs computed in
-cache-sized row blocks on a second thread while the DP consumes the previous block, a vectorised
-anti-diagonal sweep for closed unbanded distances with few features, two rows of memory when no
-path is wanted, and a batched kernel for many queries against one reference (``align_batch`` /
-``distance_batch``), one slice of queries per core. ``analysis.dtw_reference`` is the plain
-version they are tested against.
+cache-sized row blocks on a second thread while the DP consumes the previous block (Euclidean
+costs with 16 or more features as one matrix product per block, ``analysis.cost_blas``),
+a vectorised anti-diagonal sweep for closed unbanded distances with few features, two rows of
+memory when no path is wanted, and a batched kernel for many queries against one reference
+(``align_batch`` / ``distance_batch``), one slice of queries per core.
+``analysis.dtw_reference`` is the plain version they are tested against.
 """
 
 from __future__ import annotations
@@ -59,7 +60,9 @@ import numba as nb
 import numpy as np
 import numpy.typing as npt
 
+from analysis import cost_blas
 from analysis import dtw_kernels as kern
+from analysis.cost_blas import single_threaded_blas
 from analysis.frame_costs import (
     MODE_EUC,
     MODE_SQ,
@@ -76,7 +79,9 @@ IntArray = npt.NDArray[np.int64]
 StepKind = Literal["symmetric", "type-v"]
 _BLOCK_CELLS = 1 << 19  # cells per cost block: 4 MiB of float64, stays in cache
 _DIAGONAL_MAX_DIM = 8  # the anti-diagonal sweep recomputes costs per diagonal: few features only
-_PARALLEL_MIN_CELLS = 2_000_000  # below this a second thread costs more than it saves
+# Below this much work (DP cells, plus local-cost work counted as one cell per 16 features) a
+# second thread costs more than it saves: about 2 ms on one core.
+_PARALLEL_MIN_CELLS = 2_000_000
 
 
 @dataclass(frozen=True)
@@ -217,11 +222,12 @@ def run_rows(ci: CostInputs, lo: IntArray, hi: IntArray, buf: DPState) -> None:
         i0, i1 = blocks[k]
         return ci.rows(i0, i1, lo, hi, spare[k % 2])
 
-    pending = _pool().submit(costs, 0) if len(blocks) > 1 else None
-    for k, (i0, i1) in enumerate(blocks):
-        C = pending.result() if pending is not None else costs(k)
-        pending = _pool().submit(costs, k + 1) if k + 1 < len(blocks) else None
-        buf.rows(C, i0, i1, lo, hi)
+    with single_threaded_blas(ci.uses_blas and n >= cost_blas.MIN_ROWS):
+        pending = _pool().submit(costs, 0) if len(blocks) > 1 else None
+        for k, (i0, i1) in enumerate(blocks):
+            C = pending.result() if pending is not None else costs(k)
+            pending = _pool().submit(costs, k + 1) if k + 1 < len(blocks) else None
+            buf.rows(C, i0, i1, lo, hi)
 
 
 def _end_cell(buf: DPState, lo: IntArray, hi: IntArray) -> tuple[int, float]:
@@ -267,9 +273,9 @@ def distance(x: npt.ArrayLike, y: npt.ArrayLike, options: DTWOptions | None = No
         return align(x, y, opt).cost
     xa, ya, ci = prepare(x, y, opt)
     n, m = len(xa), len(ya)
-    plain = opt == DTWOptions(cost=opt.cost, weights=opt.weights)
+    plain = opt == DTWOptions(cost=opt.cost)
     if plain and ci.mode in (MODE_EUC, MODE_SQ) and xa.shape[1] <= _DIAGONAL_MAX_DIM:
-        # Closed, unbanded, symmetric, few features: the vectorised anti-diagonal sweep.
+        # Closed, unbanded, unweighted, few features: the vectorised anti-diagonal sweep.
         xf, yf = ci.x.T.ravel(), ci.yt[:, ::-1].ravel()
         return float(kern.antidiagonal_cost(ci.mode, xf, yf, n, m))
     lo, hi = band_limits(n, m, opt)
@@ -330,16 +336,18 @@ def _run_batch(
         ci.rows(r0, r1, lo, hi, C[r0:r1])
         kern.batch(C, offsets, lo, hi, *flags, opt.step == "type-v", paths, poffs, *tail, b0, b1)
 
-    _parallel([functools.partial(work, a, b) for a, b in _cuts(B, N * m)])
+    slices = _cuts(B, N * m * (1 + ya.shape[1] // 16))
+    with single_threaded_blas(ci.uses_blas and N >= cost_blas.MIN_ROWS):
+        _parallel([functools.partial(work, a, b) for a, b in slices])
     if not np.all(np.isfinite(r.costs)):
         bad = int(np.flatnonzero(~np.isfinite(r.costs))[0])
         raise ValueError(f"no admissible warping path for query {bad} with these options")
     return r
 
 
-def _cuts(count: int, cells: int) -> list[tuple[int, int]]:
+def _cuts(count: int, work: int) -> list[tuple[int, int]]:
     """[0, count) in one contiguous slice per worker thread (one slice for small problems)."""
-    workers = min(nb.get_num_threads(), count) if cells > _PARALLEL_MIN_CELLS else 1
+    workers = min(nb.get_num_threads(), count) if work > _PARALLEL_MIN_CELLS else 1
     edges = np.linspace(0, count, workers + 1).astype(int)
     return list(zip(edges[:-1].tolist(), edges[1:].tolist(), strict=True))
 

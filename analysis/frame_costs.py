@@ -12,12 +12,12 @@ A frame is a flat feature vector of length ``d``. Cost kinds:
   is the same angle for unit quaternions but does not lose half the digits near zero angle
   (``arccos(1 - 1e-16)`` is already 1.5e-8).
 
-``cost_rows`` is the compiled form the DTW kernels use: Euclidean costs four query frames at a time
-against cache-sized stretches of the reference (each reference value is loaded once for four
-frames, the loops vectorise), quaternion costs joint by joint. The BLAS expansion
-``|a|^2 + |b|^2 - 2 a.b`` was tried and dropped: it needs an exact clean-up pass where it
-cancels (identical frames must cost 0), single-threaded it was no faster than this kernel, and
-OpenBLAS's own threads made it 3-8 times slower on a shared, busy 2-core machine.
+``CostInputs.rows`` is what the DTW code calls for a block of query rows: with 16 features or more
+and at least 8 rows, Euclidean costs come from one matrix product (``analysis.cost_blas``: the
+``|a|^2 + |b|^2 - 2 a.b`` expansion on single-threaded BLAS, cells where it could cancel recomputed
+exactly); otherwise from ``cost_rows``, the compiled direct form: Euclidean costs four query frames
+at a time against cache-sized stretches of the reference (each reference value is loaded once for
+four frames, the loops vectorise), quaternion costs joint by joint.
 ``frame_cost`` is the readable per-pair formula the reference implementation uses;
 ``speed_insensitive_cost`` re-scores a path by paper 001 eq 17.
 """
@@ -31,6 +31,8 @@ from typing import Literal, get_args
 import numba as nb
 import numpy as np
 import numpy.typing as npt
+
+from analysis import cost_blas
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -120,49 +122,74 @@ def frame_cost(
 class CostInputs:
     """Arrays a compiled kernel needs to evaluate local costs of x (n, d) against y (m, d).
 
-    ``x`` and ``y`` are the features (scaled by sqrt(weight) for Euclidean kinds), ``yt`` is y
-    transposed to (d, m) so that the inner loops over reference frames read contiguous memory,
-    ``wj`` the per-joint weights of the quaternion kinds and ``mode`` the kernel's cost code.
+    ``x`` and ``y`` are the features as given, ``yt`` is y transposed to (d, m) so that the inner
+    loops over reference frames read contiguous memory, ``wj`` the weights the kernels apply: per
+    joint for the quaternion kinds, per feature for weighted Euclidean kinds (``w (a - b)^2``, the
+    difference taken before any scaling so that near-identical frames lose no digits), empty when
+    unweighted. ``mode`` is the kernel's cost code.
     """
 
     def __init__(
-        self, x: FloatArray, y: FloatArray, kind: str, weights: npt.ArrayLike | None
+        self,
+        x: FloatArray,
+        y: FloatArray,
+        kind: str,
+        weights: npt.ArrayLike | None,
+        blas: bool = True,
     ) -> None:
         d = x.shape[1]
+        self.blas = blas
         self.kind = kind
-        self.wj, self.root = np.zeros(0), np.ones(d)
+        self.wj, self.root = np.zeros(0), np.zeros(0)
         if is_quaternion_kind(kind):
             self.wj = joint_weights(d, kind, weights)
             self.mode = MODE_QUAT if kind == "quaternion" else MODE_GEO
         else:
-            self.root = np.sqrt(feature_weights(d, kind, weights))
             self.mode = MODE_EUC if kind == "euclidean" else MODE_SQ
-        self.weighted = weights is not None and not is_quaternion_kind(kind)
-        self.y = np.ascontiguousarray(y * self.root if self.weighted else y)
+            if weights is not None:
+                self.wj = feature_weights(d, kind, weights)
+                self.root = np.sqrt(self.wj)
+        self.y = np.ascontiguousarray(y)
         self.yt = np.ascontiguousarray(self.y.T)
-        self._set_query(x)
+        if self.uses_blas:  # scaled reference and its norms, shared by every query block
+            ys = self.y * self.root if self.root.size else self.y
+            self.ys_t = np.ascontiguousarray(ys.T)
+            self.ynorm = np.einsum("jk,jk->j", ys, ys)
+        self.x = np.ascontiguousarray(x)
 
-    def _set_query(self, x: FloatArray) -> None:
-        self.x = np.ascontiguousarray(x * self.root if self.weighted else x)
+    @property
+    def uses_blas(self) -> bool:
+        """True when large blocks of Euclidean costs go through a matrix product."""
+        euclidean = self.mode in (MODE_EUC, MODE_SQ)
+        return self.blas and euclidean and self.y.shape[1] >= cost_blas.MIN_DIM
 
     def with_query(self, x: FloatArray) -> CostInputs:
         """The same reference and cost with another query x (n, d); the reference is shared."""
         other = copy.copy(self)
-        other._set_query(x)
+        other.x = np.ascontiguousarray(x)
         return other
 
     def rows(self, i0: int, i1: int, lo: IntArray, hi: IntArray, out: FloatArray) -> FloatArray:
         """Local costs of query rows i0..i1-1 within their bands into out[: i1 - i0]."""
-        cost_rows(self.mode, self.x, self.yt, self.wj, 0, i0, i1, lo, hi, out)
+        if self.uses_blas and cost_blas.worth_it(self.x.shape[1], lo[i0:i1], hi[i0:i1]):
+            a, b = int(lo[i0:i1].min()), int(hi[i0:i1].max())
+            xs = self.x[i0:i1] * self.root if self.root.size else self.x[i0:i1]
+            with cost_blas.single_threaded_blas():
+                G = np.matmul(xs, self.ys_t[:, a : b + 1])
+            cost_blas.finish(G, xs, self.x[i0:i1], self.y, self.ynorm, self.wj, a,
+                             self.mode == MODE_EUC, out)  # fmt: skip
+        else:
+            cost_rows(self.mode, self.x, self.yt, self.wj, 0, i0, i1, lo, hi, out)
         return out
 
 
 @nb.njit(cache=True, nogil=True)
 def _sq_four(  # noqa: PLR0917 - numba functions take positional arguments only
-    x: FloatArray, yt: FloatArray, i: int, lo: int, hi: int, out: FloatArray, euc: bool,
-    acc: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    x: FloatArray, yt: FloatArray, w: FloatArray, i: int, lo: int, hi: int, out: FloatArray,
+    euc: bool, acc: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
 ) -> None:  # fmt: skip
-    """Squared (or plain) Euclidean costs of query rows i..i+3 into out[0:4, lo:hi+1].
+    """Squared (or plain) Euclidean costs of query rows i..i+3 into out[0:4, lo:hi+1];
+    w: feature weights (d,) or empty.
 
     Four separate accumulators: each reference value is loaded once for four rows, and LLVM
     vectorises the inner loop (it does not when they are rows of one 2-D array).
@@ -177,13 +204,14 @@ def _sq_four(  # noqa: PLR0917 - numba functions take positional arguments only
             o3[t] = 0.0
         for k in range(x.shape[1]):
             a0, a1, a2, a3 = x[i, k], x[i + 1, k], x[i + 2, k], x[i + 3, k]
+            wk = w[k] if w.size else 1.0
             yk = yt[k, s:]
             for t in range(L):
                 v = yk[t]
-                o0[t] += (a0 - v) * (a0 - v)
-                o1[t] += (a1 - v) * (a1 - v)
-                o2[t] += (a2 - v) * (a2 - v)
-                o3[t] += (a3 - v) * (a3 - v)
+                o0[t] += wk * ((a0 - v) * (a0 - v))
+                o1[t] += wk * ((a1 - v) * (a1 - v))
+                o2[t] += wk * ((a2 - v) * (a2 - v))
+                o3[t] += wk * ((a3 - v) * (a3 - v))
         for r in range(4):
             row, o = out[r, s:], acc[r]
             for t in range(L):
@@ -192,14 +220,15 @@ def _sq_four(  # noqa: PLR0917 - numba functions take positional arguments only
 
 @nb.njit(cache=True, nogil=True)
 def _sq_row(  # noqa: PLR0917
-    x: FloatArray, yt: FloatArray, i: int, lo: int, hi: int, out: FloatArray, euc: bool
-) -> None:
+    x: FloatArray, yt: FloatArray, w: FloatArray, i: int, lo: int, hi: int, out: FloatArray,
+    euc: bool,
+) -> None:  # fmt: skip
     for j in range(lo, hi + 1):
         out[j] = 0.0
     for k in range(x.shape[1]):
-        xi = x[i, k]
+        xi, wk = x[i, k], w[k] if w.size else 1.0
         for j in range(lo, hi + 1):
-            out[j] += (xi - yt[k, j]) * (xi - yt[k, j])
+            out[j] += wk * ((xi - yt[k, j]) * (xi - yt[k, j]))
     if euc:
         for j in range(lo, hi + 1):
             out[j] = math.sqrt(out[j])
@@ -257,12 +286,12 @@ def cost_rows(  # noqa: PLR0917
     acc = (np.empty(_STRETCH), np.empty(_STRETCH), np.empty(_STRETCH), np.empty(_STRETCH))
     while mode <= MODE_SQ and i + 4 <= i1:
         a, b = lo[i : i + 4].min(), hi[i : i + 4].max()
-        _sq_four(x, yt, xoff + i, a, b, out[i - i0 : i - i0 + 4], mode == MODE_EUC, acc)
+        _sq_four(x, yt, wj, xoff + i, a, b, out[i - i0 : i - i0 + 4], mode == MODE_EUC, acc)
         i += 4
     for r in range(i, i1):
         a, b, row = lo[r], hi[r], out[r - i0]
         if mode <= MODE_SQ:
-            _sq_row(x, yt, xoff + r, a, b, row, mode == MODE_EUC)
+            _sq_row(x, yt, wj, xoff + r, a, b, row, mode == MODE_EUC)
         elif mode == MODE_QUAT:
             _quat_row(xoff + r, x, yt, wj, a, b, row)
         else:

@@ -36,9 +36,10 @@ with warnings.catch_warnings():
 
 SQ = DTWOptions(cost="sqeuclidean")
 NOTES = """Calls: project `analysis.dtw.distance` / `distance_batch` / `align` with squared
-Euclidean cost (1-D distance: vectorised anti-diagonal sweep; d = 66: local costs four frames at
-a time on a second thread while the DP runs; batch: one slice of repetitions per core);
-dtaidistance 2.5 `dtw.distance_fast`, `dtw_ndim.distance_fast`,
+Euclidean cost (1-D distance: vectorised anti-diagonal sweep; d = 66: local costs as one BLAS
+matrix product per block of rows, on one BLAS thread, cells where the expansion could cancel
+recomputed exactly, on a second thread while the DP runs; batch: the same local costs, one slice
+of repetitions per core); dtaidistance 2.5 `dtw.distance_fast`, `dtw_ndim.distance_fast`,
 `dtw_ndim.distance_matrix_fast(block=..., parallel=True)` (its fastest batched form) and
 `dtw.warping_path_fast`; tslearn `metrics.dtw`, `cdist_dtw`, `dtw_path`. Streaming:
 `analysis.online.OpenEndAligner.push`, Euclidean cost, 300 frames per run. The machine is a

@@ -3,7 +3,7 @@
 The suite checks the UI-PRMD copies kept in the repository; this covers data that may not be
 copied into it (the Bandai-Namco set is non-commercial), read from a path given on the command line:
 
-    .venv/bin/python -m bench.check_kinematics ../shared/data
+    .venv/bin/python -m bench.check_kinematics DATA_FOLDER   # e.g. the shared data folder
 """
 
 from __future__ import annotations

@@ -1,7 +1,12 @@
 """On-line alignment on real data (issue 3, part b): UI-PRMD patient sessions against the tutor.
 
     .venv/bin/python -m bench.eval_alignment [--data data/ui-prmd] [--features directions]
-        [--iterations 40] [--exercises m01,m02] [--markdown docs/sections/eval_alignment.md]
+        [--iterations 30] [--exercises m01,m02] [--jobs 3] [--ablation]
+        [--markdown docs/sections/eval_alignment.md]
+
+Part (a) of the issue's evaluation, exercise identification (LUT-DTW vs plain DTW), is
+``bench/eval_identification.py`` (documented in docs/sections/eval_identification.md); this
+script does not repeat it.
 
 For each of the 10 exercises the tutor is subject s01's correct session (10 repetitions); the
 patients are s02-s07, correct and incorrect (12 sessions of 10 repetitions). Every session is
@@ -18,9 +23,12 @@ Protocol choices (also printed):
   quaternion cost of paper 000 (eq 1). The roll about a bone, which Kinect does not measure,
   is noise in the quaternions and absent from the directions.
 - WOOE's weights are learned on the other half of the patients (s02-s04 for s05-s07 and back),
-  never on the evaluated subject; segments for eq 5 are half repetitions (start -> end of range ->
-  next start) from ``landmarks.csv``. "OE+w" is Open-End DTW with weights learned the same way
-  but without path-length weighting, to separate the two ingredients of WOOE.
+  never on the evaluated subject, by CMA-ES with 30 generations of 6 parents / 12 offspring from
+  w = 1 with an initial step of 0.3 (the paper: 300 generations, step 0.02; with a tenth of the
+  generations a step of 0.02 leaves the weights near 1); segments for eq 5 are half
+  repetitions (start -> end of range -> next start) from ``landmarks.csv``. With ``--ablation``,
+  "OE+w" is Open-End DTW with weights learned the same way but without path-length weighting,
+  to separate WOOE's two ingredients.
 - Some subjects use the other side of the body: each session or its mirror image (left and right
   swapped), whichever has the lower offline DTW cost, is aligned to the tutor (a therapist would
   prescribe the side).
@@ -38,6 +46,7 @@ import os
 import sys
 import time
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -64,7 +73,8 @@ BONES = [
     "RightUpperLeg",
     "RightLowerLeg",
 ]
-METHODS = ("offline", "OE", "WOOE", "OE+w", "FP-C+V", "FP-C+V+PLW")
+METHODS = ("offline", "OE", "WOOE", "FP-C+V", "FP-C+V+PLW")
+ABLATION = "OE+w"
 
 
 @dataclass(frozen=True)
@@ -130,11 +140,15 @@ def oriented(tutor: Take, take: Take, opt: DTWOptions) -> np.ndarray:
     return frames[int(costs[1] < costs[0])]
 
 
-def train(tutor: Take, takes: list[Take], opt: DTWOptions, iterations: int) -> np.ndarray:
+def train(
+    tutor: Take, takes: list[Take], opt: DTWOptions, iterations: int, sigma: float
+) -> np.ndarray:
     """CMA-ES joint weights for Open-End DTW with ``opt`` (paper 000, eq 5, half repetitions)."""
     frames = [oriented(tutor, t, opt) for t in takes]
     joints = len(BONES) if opt.cost == "euclidean" else None
-    wo = JointWeightOptimizer(options=opt, iterations=iterations, seed=0, joints=joints)
+    wo = JointWeightOptimizer(
+        options=opt, iterations=iterations, sigma0=sigma, seed=0, joints=joints
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         wo.fit(tutor.features, tutor.segments, frames, [t.segments for t in takes])
@@ -150,19 +164,14 @@ def session_maps(
 ) -> dict[str, dict[str, np.ndarray]]:
     """Reference index per patient frame for every method, and each method's offline map.
 
-    w: CMA-ES weights trained with path-length weighting ("WOOE") and without ("OE+w")."""
-    options = {
-        "offline": opt,
-        "OE": opt,
-        "FP-C+V": opt,
-        "FP-C+V+PLW": opt,
-        "WOOE": replace(opt, weights=tuple(w["WOOE"])),
-        "OE+w": replace(opt, weights=tuple(w["OE+w"])),
-    }
+    w: CMA-ES weights trained with path-length weighting ("WOOE") and, for the ablation,
+    without ("OE+w")."""
+    options = {m: opt for m in ("offline", "OE", "FP-C+V", "FP-C+V+PLW")}
+    options |= {m: replace(opt, weights=tuple(v)) for m, v in w.items()}
     offline = {
         m: offline_mapping(align(frames, tutor, o).path, len(frames))
         for m, o in options.items()
-        if m in ("offline", "WOOE", "OE+w")
+        if m in ("offline", "WOOE", ABLATION)
     }
     fp = ForwardPlotOptions(method="C", window=window, history=6)
     tv = replace(opt, step="type-v")
@@ -175,12 +184,13 @@ def session_maps(
             ),
             frames,
         ),
-        "OE+w": stream(OpenEndAligner(tutor, options["OE+w"], keep_path=False), frames),
         "FP-C+V": stream(ForwardPlotAligner(tutor, fp, tv), frames),
         "FP-C+V+PLW": stream(
             ForwardPlotAligner(tutor, fp, replace(tv, path_length_weighting=True)), frames
         ),
     }
+    if ABLATION in w:
+        maps[ABLATION] = stream(OpenEndAligner(tutor, options[ABLATION], keep_path=False), frames)
     return {"maps": maps, "offline": {m: offline.get(m, offline["offline"]) for m in maps}}
 
 
@@ -194,16 +204,16 @@ def run_exercise(args: argparse.Namespace, ex: str, labels: dict, landmarks: dic
     ]
     opt = DTWOptions(cost="euclidean" if args.features == "directions" else "quaternion")
     window = max(2, round(len(tutor.reps) / (tutor.reps.max() + 1) / 3))
-    agree: dict[str, list[np.ndarray]] = {m: [] for m in METHODS}
-    dev: dict[str, list[np.ndarray]] = {m: [] for m in METHODS}
+    methods = methods_of(args)
+    agree: dict[str, list[np.ndarray]] = {m: [] for m in methods}
+    dev: dict[str, list[np.ndarray]] = {m: [] for m in methods}
     weights = []
     for train_on, test_on in (FOLDS, FOLDS[::-1]):
         train_takes = [t for t in takes if t.subject in train_on]
         plw = replace(opt, path_length_weighting=True)
-        w = {
-            "WOOE": train(tutor, train_takes, plw, args.iterations),
-            "OE+w": train(tutor, train_takes, opt, args.iterations),
-        }
+        w = {"WOOE": train(tutor, train_takes, plw, args.iterations, args.sigma)}
+        if args.ablation:
+            w[ABLATION] = train(tutor, train_takes, opt, args.iterations, args.sigma)
         weights.append(w["WOOE"])
         for take in (t for t in takes if t.subject in test_on):
             r = session_maps(tutor.features, oriented(tutor, take, opt), opt, w, window)
@@ -218,21 +228,25 @@ def run_exercise(args: argparse.Namespace, ex: str, labels: dict, landmarks: dic
     }
 
 
-def tables(results: dict[str, dict], kind: str) -> str:  # type: ignore[type-arg]
-    head = "| exercise | " + " | ".join(METHODS) + " | WOOE >= OE | FP-C+V dev <= 10 |"
+def methods_of(args: argparse.Namespace) -> tuple[str, ...]:
+    return (*METHODS, ABLATION) if args.ablation else METHODS
+
+
+def tables(results: dict[str, dict], kind: str, methods: tuple[str, ...]) -> str:  # type: ignore[type-arg]
+    head = "| exercise | " + " | ".join(methods) + " | WOOE >= OE | FP-C+V dev <= 10 |"
     lines = [
         "Share of patient frames mapped into the same repetition (higher is better), and",
         "median |on-line - offline DTW| in frames (same local cost), per exercise:",
         "",
         head,
-        "|---" * (len(METHODS) + 3) + "|",
+        "|---" * (len(methods) + 3) + "|",
     ]
     for ex, r in results.items():
-        cells = [f"{r['agree'][m]:.3f} / {r['dev'][m]:.0f}" for m in METHODS]
+        cells = [f"{r['agree'][m]:.3f} / {r['dev'][m]:.0f}" for m in methods]
         ok1, ok2 = ("yes" if t else "NO" for t in _targets(r))
         lines.append(f"| {ex} | " + " | ".join(cells) + f" | {ok1} | {ok2} |")
-    mean = {m: np.mean([r["agree"][m] for r in results.values()]) for m in METHODS}
-    lines.append("| mean | " + " | ".join(f"{mean[m]:.3f}" for m in METHODS) + " | | |")
+    mean = {m: np.mean([r["agree"][m] for r in results.values()]) for m in methods}
+    lines.append("| mean | " + " | ".join(f"{mean[m]:.3f}" for m in methods) + " | | |")
     windows = ", ".join(f"{e} {r['window']}" for e, r in results.items())
     passed = [sum(v) for v in zip(*(_targets(r) for r in results.values()), strict=True)]
     lines += [
@@ -249,27 +263,36 @@ def _targets(r: dict) -> tuple[bool, bool]:  # type: ignore[type-arg]
     return r["agree"]["WOOE"] >= r["agree"]["OE"], r["dev"]["FP-C+V"] <= 10
 
 
+def evaluate(kind: str, ex: str, args: argparse.Namespace) -> dict:  # type: ignore[type-arg]
+    """One exercise with one feature kind (a separate process with ``--jobs``)."""
+    labels, landmarks = read_csv(args.data / "labels.csv"), read_csv(args.data / "landmarks.csv")
+    r = run_exercise(argparse.Namespace(**{**vars(args), "features": kind}), ex, labels, landmarks)
+    print(kind, ex, r["agree"], r["dev"], flush=True)
+    return r
+
+
 def main(argv: list[str] | None = None) -> str:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=Path("data/ui-prmd"))
     parser.add_argument("--features", default="directions", help="directions, quaternions or both")
     parser.add_argument("--iterations", type=int, default=30, help="CMA-ES generations")
     parser.add_argument("--exercises", default=",".join(EXERCISES))
+    parser.add_argument("--sigma", type=float, default=0.3, help="CMA-ES initial step")
+    parser.add_argument("--jobs", type=int, default=1, help="exercises evaluated in parallel")
+    parser.add_argument("--ablation", action="store_true", help='also "OE+w" (see Protocol)')
     parser.add_argument("--markdown", help="also write the section to this file")
-    parser.add_argument("--no-identification", action="store_true")
     args = parser.parse_args(argv)
-    labels, landmarks = read_csv(args.data / "labels.csv"), read_csv(args.data / "landmarks.csv")
-    t0, sections = time.time(), []
-    for kind in args.features.split(","):
-        if kind not in ("directions", "quaternions"):
-            parser.error(f"unknown features {kind!r}")
-        results = {}
-        for ex in args.exercises.split(","):
-            results[ex] = run_exercise(
-                argparse.Namespace(**{**vars(args), "features": kind}), ex, labels, landmarks
-            )
-            print(kind, ex, results[ex]["agree"], results[ex]["dev"], flush=True)
-        sections.append(tables(results, kind))
+    kinds = args.features.split(",")
+    if any(k not in ("directions", "quaternions") for k in kinds):
+        parser.error(f"unknown features {args.features!r}")
+    t0, exercises = time.time(), args.exercises.split(",")
+    todo = [(k, ex) for k in kinds for ex in exercises]
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        done = list(pool.map(evaluate, *zip(*todo, strict=True), [args] * len(todo)))
+    results = dict(zip(todo, done, strict=True))
+    sections = [
+        tables({ex: results[k, ex] for ex in exercises}, k, methods_of(args)) for k in kinds
+    ]
     cmd = " ".join(
         ["python -m bench.eval_alignment", *(argv if argv is not None else sys.argv[1:])]
     )
@@ -284,25 +307,7 @@ def main(argv: list[str] | None = None) -> str:
     print(text)
     if args.markdown:
         Path(args.markdown).write_text(text, encoding="utf-8")
-    identification(args)
     return text
-
-
-def identification(args: argparse.Namespace) -> None:
-    """Part (a) of the issue's evaluation lives in bench/eval_identification.py (another helper)."""
-    if args.no_identification:
-        return
-    try:
-        from bench import eval_identification
-    except ImportError:
-        return
-    if hasattr(eval_identification, "main"):
-        saved = sys.argv
-        sys.argv = ["eval_identification", "--data", str(args.data)]
-        try:
-            eval_identification.main()
-        finally:
-            sys.argv = saved
 
 
 if __name__ == "__main__":

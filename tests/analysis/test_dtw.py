@@ -279,3 +279,42 @@ def test_result_is_frozen() -> None:
         4,
         5,
     )
+
+
+@pytest.mark.parametrize("kind", ["euclidean", "sqeuclidean"])
+def test_matrix_product_costs_equal_reference(kind: str) -> None:
+    """The BLAS expansion (d >= 16, blocks of >= 8 rows) stays within 1e-9 of the reference,
+    also where it cancels: large offsets, near-identical and identical frames."""
+    rng = np.random.default_rng(7)
+    y = 1000.0 + rng.standard_normal((26, 24))
+    x = np.concatenate([y[:10] + 1e-7 * rng.standard_normal((10, 24)), y[5:15], y[::-2]])
+    weights = tuple(rng.uniform(0.5, 2.0, 6))
+    for opt in (
+        DTWOptions(cost=kind),
+        DTWOptions(cost=kind, weights=weights, window=6, path_length_weighting=True),
+        DTWOptions(cost=kind, open_begin=True, open_end=True, step="type-v"),
+    ):
+        ref = dtw_reference.align(x, y, opt)
+        assert distance(x, y, opt) == pytest.approx(ref.cost, rel=1e-9, abs=1e-12)
+        assert align(x, y, opt).cost == pytest.approx(ref.cost, rel=1e-9, abs=1e-12)
+        assert dtw.distance_batch([x, x[3:]], y, opt)[0] == pytest.approx(ref.cost, rel=1e-9)
+    C = cost_matrix(x, y, kind, weights)
+    exact = np.array([[frame_cost(a, b, kind, weights) for b in y] for a in x])
+    np.testing.assert_allclose(C, exact, rtol=1e-10, atol=0)
+    assert np.all(C[10:20, 5:15].diagonal() == 0.0)  # identical frames: exactly zero
+
+
+def test_blas_limit_is_counted_and_restored() -> None:
+    from threadpoolctl import threadpool_info
+
+    from analysis.cost_blas import single_threaded_blas
+
+    def blas_threads() -> list[int]:
+        return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+    before = blas_threads()
+    with single_threaded_blas():
+        with single_threaded_blas():
+            assert all(t == 1 for t in blas_threads())
+        assert all(t == 1 for t in blas_threads())  # the inner exit does not undo the outer
+    assert blas_threads() == before
