@@ -67,9 +67,33 @@ bench-browser: deps
 	bash tests/e2e/ensure_chromium.sh
 	E2E_DOCS=1 $(BIN)/python -m pytest tests/e2e -q
 
-# Long fuzzing run of the BVH parser (the suite runs a short fixed-seed version).
+# Long fuzzing run of the BVH parser and the upload endpoints (the suite runs a fixed-seed
+# 8,400 + 1,600 cases); FUZZ_EXAMPLES and FUZZ_UPLOAD_EXAMPLES set the counts.
 fuzz: $(VENV)/.stamp-python
-	FUZZ_EXAMPLES=$${FUZZ_EXAMPLES:-20000} $(BIN)/python -m pytest tests/analysis/test_bvh_fuzz.py -p no:django -q
+	FUZZ_EXAMPLES=$${FUZZ_EXAMPLES:-50000} $(BIN)/python -m pytest tests/analysis/test_bvh_fuzz.py -p no:django -q
+	FUZZ_UPLOAD_EXAMPLES=$${FUZZ_UPLOAD_EXAMPLES:-10000} $(BIN)/python -m pytest tests/webapp/test_upload_fuzz.py -q -s
+
+# Scale: a throw-away PostgreSQL database with a large clinic (10,000 patients, 1,000,000 runs),
+# page latency and query counts on it, then the database is dropped.
+BIG_DB ?= big
+.PHONY: bench-scale load
+bench-scale: $(VENV)/.stamp-python
+	@set -e; url=postgres://postgres@127.0.0.1:5432/$(BIG_DB); \
+	createdb -h 127.0.0.1 -U postgres $(BIG_DB); \
+	trap 'dropdb -h 127.0.0.1 -U postgres --if-exists $(BIG_DB)' EXIT; \
+	DATABASE_URL=$$url $(BIN)/python manage.py migrate -v0; \
+	DATABASE_URL=$$url $(BIN)/python manage.py fill_large_clinic \
+		--patients $${PATIENTS:-10000} --runs $${RUNS:-1000000}; \
+	DATABASE_URL=$$url $(BIN)/python -m bench.bench_scale
+
+$(VENV)/.stamp-load: pyproject.toml | $(VENV)/.stamp-python
+	$(BIN)/pip install --quiet -e '.[dev,load]'
+	touch $@
+
+# Load: gunicorn + 2 Celery workers + PostgreSQL + Redis on loopback, 50 browsing therapists and
+# 20 uploaders (locust) for LOAD_SECONDS, then the latency table; stops everything it started.
+load: $(VENV)/.stamp-load
+	$(BIN)/python -m bench.load.run_load --duration $${LOAD_SECONDS:-60}
 
 clean:
 	rm -rf $(VENV) node_modules staticfiles .pytest_cache .mypy_cache .ruff_cache

@@ -101,16 +101,21 @@ def _load_bytes(source: Source) -> bytes:
     return Path(source).read_bytes()
 
 
-def _decompress(content: bytes) -> bytes:
+def _size_text(n_bytes: int) -> str:
+    return f"{n_bytes / (1 << 30):g} GiB" if n_bytes >= 1 << 30 else f"{n_bytes / (1 << 20):g} MiB"
+
+
+def _decompress(content: bytes, max_bytes: int = MAX_DECOMPRESSED_BYTES) -> bytes:
     if content[:2] != b"\x1f\x8b":
         return content
     inflater = zlib.decompressobj(wbits=31)
     try:
-        data = inflater.decompress(content, MAX_DECOMPRESSED_BYTES)
+        # max_length stops a gzip bomb after max_bytes instead of filling memory.
+        data = inflater.decompress(content, max_bytes)
     except zlib.error as error:
         raise BVHError(f"the gzip data is damaged ({error})") from None
     if inflater.unconsumed_tail:
-        raise BVHError("the decompressed file is larger than 1 GiB")
+        raise BVHError(f"the decompressed file is larger than {_size_text(max_bytes)}")
     if not inflater.eof:
         raise BVHError("the gzip data is truncated")
     return data
@@ -192,23 +197,44 @@ def _skeleton(tree: Hierarchy) -> Skeleton:
     )
 
 
-def parse(data: bytes) -> Motion:
-    """Parse uncompressed BVH bytes."""
+def _check_frame_size(n_frames: int, n_channels: int, max_values: int, line: int) -> None:
+    """Refuse a declared frame block above the caller's cap before allocating it."""
+    if n_frames * n_channels > max_values:
+        raise BVHError(
+            f"{n_frames} frames × {n_channels} channels = {n_frames * n_channels} values; "
+            f"at most {max_values} are accepted",
+            line,
+        )
+
+
+def parse(data: bytes, *, max_values: int = MAX_VALUES) -> Motion:
+    """Parse uncompressed BVH bytes; ``max_values`` caps frames × channels (memory: 8 B each)."""
     header_lines, header_line, motion_end, motion_line = _split_sections(data)
     skeleton = _skeleton(parse_hierarchy(header_lines, header_line))
     n_channels = skeleton.n_channels
     if n_channels == 0:
         raise BVHError("the skeleton declares no channels", header_line)
     n_frames, frame_time, offset, data_line = _frame_header(data, motion_end, motion_line)
-    if n_frames * n_channels > min(MAX_VALUES, len(data) - motion_end):
+    # Every value takes at least one byte: a cheap bound before allocating the frame array.
+    if n_frames * n_channels > len(data) - motion_end:
         raise BVHError(f"{n_frames} frames declared but the file is far too short", data_line - 2)
+    _check_frame_size(n_frames, n_channels, min(max_values, MAX_VALUES), data_line - 2)
     frames = parse_frames(memoryview(data)[offset:], n_frames, n_channels, data_line)
     return Motion(skeleton, frames, frame_time)
 
 
-def read(source: Source) -> Motion:
-    """Read a BVH file from a path, bytes, text or binary file object (gzip detected by content)."""
-    return parse(_decompress(_load_bytes(source)))
+def read(
+    source: Source,
+    *,
+    max_bytes: int = MAX_DECOMPRESSED_BYTES,
+    max_values: int = MAX_VALUES,
+) -> Motion:
+    """Read a BVH file from a path, bytes, text or binary file object (gzip detected by content).
+
+    ``max_bytes`` caps the decompressed size of a gzip file and ``max_values`` the frames ×
+    channels: callers reading untrusted uploads pass limits that keep memory bounded.
+    """
+    return parse(_decompress(_load_bytes(source), max_bytes), max_values=max_values)
 
 
 def _format_number(value: float) -> str:

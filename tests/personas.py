@@ -1,9 +1,11 @@
 """People the web tests act as: a therapist, a colleague in the same clinic, an outsider from
-another clinic, the patient, another patient of the same clinic, and anonymous."""
+another clinic, the patient, another patient of the same clinic, the clinic's admin, and
+anonymous."""
 
 from __future__ import annotations
 
 import csv
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,6 +27,7 @@ class World:
     patient: Patient
     other_patient: Patient
     outsider_patient: Patient
+    clinic_admin: User
 
 
 def make_user(username: str, clinic: Clinic, role: str) -> User:
@@ -48,6 +51,7 @@ def make_world() -> World:
         clinic=clinic, user=other_patient_user, display_name="Bob Example"
     )
     outsider_patient = Patient.objects.create(clinic=other, display_name="Cy Elsewhere")
+    clinic_admin = make_user("clinic-admin", clinic, Role.CLINIC_ADMIN)
     return World(
         clinic,
         other,
@@ -59,6 +63,7 @@ def make_world() -> World:
         patient,
         other_patient,
         outsider_patient,
+        clinic_admin,
     )
 
 
@@ -104,10 +109,14 @@ def make_recording(patient: Patient, exercise, source: str = "reps/m01_s01_e02.b
 
     from webapp.recordings.models import AnalysisRun, Recording
 
+    content = fixture_bytes(source)
     recording = Recording(
-        clinic=patient.clinic, patient=patient, exercise=exercise, checksum=source
+        clinic=patient.clinic,
+        patient=patient,
+        exercise=exercise,
+        checksum=hashlib.sha256(content).hexdigest(),  # reads verify it
     )
-    recording.file.save("rec.bvh.gz", ContentFile(fixture_bytes(source)), save=False)
+    recording.file.save("rec.bvh.gz", ContentFile(content), save=False)
     recording.save()
     AnalysisRun.objects.create(recording=recording)
     return recording

@@ -58,7 +58,7 @@ INSTALLED_APPS = [
     "webapp.api",
     "webapp.reports",
     "rest_framework",
-    "rest_framework.authtoken",
+    "axes",
     "drf_spectacular",
     "drf_spectacular_sidecar",
 ]
@@ -78,6 +78,10 @@ MIDDLEWARE = [
     "webapp.accounts.two_factor.TwoFactorMiddleware",
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
+    # Remembers the request for the audit log's write events (model signals have no request).
+    "webapp.audit.context.AuditContextMiddleware",
+    # Last, as django-axes asks: turns a locked-out login into a 429 page.
+    "axes.middleware.AxesMiddleware",
 ]
 
 ROOT_URLCONF = "webapp.urls"
@@ -139,9 +143,48 @@ LOGIN_REDIRECT_URL = "dashboard:home"
 LOGOUT_REDIRECT_URL = "accounts:login"
 EMAIL_BACKEND = os.environ.get("EMAIL_BACKEND", "django.core.mail.backends.console.EmailBackend")
 
-SESSION_COOKIE_SECURE = not DEBUG
-CSRF_COOKIE_SECURE = not DEBUG
+# Security (issue 8). Production (DEBUG off) is HTTPS-only unless the environment says otherwise;
+# `manage.py check --deploy` is clean with these defaults (tests/webapp/test_deploy_check.py).
+SESSION_COOKIE_SECURE = env_bool("SESSION_COOKIE_SECURE", not DEBUG)
+CSRF_COOKIE_SECURE = env_bool("CSRF_COOKIE_SECURE", not DEBUG)
 SESSION_COOKIE_HTTPONLY = True
+SESSION_COOKIE_SAMESITE = "Lax"
+# A shared clinic computer: sessions end after 8 hours and when the browser closes.
+SESSION_COOKIE_AGE = int(os.environ.get("SESSION_COOKIE_AGE", str(8 * 3600)))
+SESSION_EXPIRE_AT_BROWSER_CLOSE = True
+SECURE_SSL_REDIRECT = env_bool("SECURE_SSL_REDIRECT", not DEBUG)
+# Health checks of the container come over plain HTTP from inside the host.
+SECURE_REDIRECT_EXEMPT = [r"^healthz$"]
+SECURE_HSTS_SECONDS = int(os.environ.get("SECURE_HSTS_SECONDS", "0" if DEBUG else "31536000"))
+SECURE_HSTS_INCLUDE_SUBDOMAINS = env_bool("SECURE_HSTS_INCLUDE_SUBDOMAINS", not DEBUG)
+SECURE_HSTS_PRELOAD = env_bool("SECURE_HSTS_PRELOAD", not DEBUG)
+SECURE_CONTENT_TYPE_NOSNIFF = True
+SECURE_REFERRER_POLICY = "same-origin"
+X_FRAME_OPTIONS = "DENY"
+# Behind a TLS-terminating proxy that sets X-Forwarded-Proto (set SECURE_PROXY_SSL_HEADER=1).
+if env_bool("SECURE_PROXY_SSL_HEADER", False):
+    SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
+
+# Login rate limiting (django-axes): after AXES_FAILURE_LIMIT failed passwords for one username,
+# or from one client address, that username (address) is locked for AXES_COOLOFF_HOURS, on the
+# login page and on the API token endpoint alike. Behind a reverse proxy, set
+# TRUSTED_PROXY_COUNT so the address is the client's (X-Forwarded-For), not the proxy's.
+AUTHENTICATION_BACKENDS = [
+    "webapp.accounts.lockout.ClinicAxesBackend",
+    "django.contrib.auth.backends.ModelBackend",
+]
+AXES_FAILURE_LIMIT = int(os.environ.get("AXES_FAILURE_LIMIT", "5"))
+AXES_COOLOFF_TIME = float(os.environ.get("AXES_COOLOFF_HOURS", "0.25"))
+AXES_LOCKOUT_PARAMETERS = env_list("AXES_LOCKOUT_BY", "username,ip_address")
+if os.environ.get("TRUSTED_PROXY_COUNT"):
+    AXES_IPWARE_PROXY_COUNT = int(os.environ["TRUSTED_PROXY_COUNT"])
+    AXES_IPWARE_META_PRECEDENCE_ORDER = ["HTTP_X_FORWARDED_FOR", "REMOTE_ADDR"]
+AXES_RESET_ON_SUCCESS = True
+AXES_LOCKOUT_CALLABLE = "webapp.accounts.lockout.lockout_response"
+AXES_USERNAME_FORM_FIELD = "username"
+
+# API tokens (webapp.accounts.tokens): days a token obtained with a password stays valid.
+API_TOKEN_DAYS = int(os.environ.get("API_TOKEN_DAYS", "30"))
 
 # Celery: eager (in-process) when no broker is configured, so `make run` needs no services.
 REDIS_URL = os.environ.get("REDIS_URL", "")
@@ -166,6 +209,12 @@ RETRIEVAL_COMPONENTS = int(os.environ.get("RETRIEVAL_COMPONENTS", "4"))
 RETRIEVAL_MAX_CANDIDATES = int(os.environ.get("RETRIEVAL_MAX_CANDIDATES", "200"))
 # Fault injection only (tests/workers/test_worker_crash.py): seconds slept after each stage.
 ANALYSIS_STAGE_DELAY_SECONDS = float(os.environ.get("ANALYSIS_STAGE_DELAY_SECONDS", "0"))
+# A QUEUED run not started within this time had its message lost (broker restarted empty): the
+# beat task enqueues it again, at most ANALYSIS_MAX_ENQUEUES times in all, then fails it.
+ANALYSIS_REQUEUE_AFTER_SECONDS = int(os.environ.get("ANALYSIS_REQUEUE_AFTER_SECONDS", "600"))
+ANALYSIS_MAX_ENQUEUES = int(os.environ.get("ANALYSIS_MAX_ENQUEUES", "4"))
+# Deleted patients are hidden at once and purged (rows and files) after this many days.
+PATIENT_RETENTION_DAYS = int(os.environ.get("PATIENT_RETENTION_DAYS", "30"))
 CELERY_TASK_SOFT_TIME_LIMIT = ANALYSIS_SOFT_TIME_LIMIT
 CELERY_TASK_TIME_LIMIT = ANALYSIS_TIME_LIMIT
 # A message not acknowledged within this time is delivered again: keep it above the longest task.
@@ -175,6 +224,8 @@ CELERY_BROKER_TRANSPORT_OPTIONS = {
 CELERY_BROKER_CONNECTION_RETRY_ON_STARTUP = True
 CELERY_BEAT_SCHEDULE = {
     "reap-stuck-runs": {"task": "workers.tasks.reap_stuck_runs", "schedule": 60.0},
+    "requeue-lost-runs": {"task": "workers.tasks.requeue_lost_runs", "schedule": 60.0},
+    "purge-deleted-patients": {"task": "workers.tasks.purge_deleted_patients", "schedule": 86400.0},
     "rebuild-models-with-corrections": {
         "task": "workers.tasks.rebuild_models_with_corrections",
         "schedule": 3600.0,
@@ -184,13 +235,15 @@ CELERY_BEAT_SCHEDULE = {
 
 REST_FRAMEWORK = {
     "DEFAULT_AUTHENTICATION_CLASSES": [
-        "rest_framework.authentication.TokenAuthentication",
+        # Hashed, clinic-scoped, revocable tokens: `Authorization: Token <key>`.
+        "webapp.accounts.authentication.ClinicTokenAuthentication",
         "rest_framework.authentication.SessionAuthentication",
     ],
     "DEFAULT_PERMISSION_CLASSES": ["rest_framework.permissions.IsAuthenticated"],
     "DEFAULT_PAGINATION_CLASS": "rest_framework.pagination.LimitOffsetPagination",
     "PAGE_SIZE": 50,
-    "DEFAULT_SCHEMA_CLASS": "drf_spectacular.openapi.AutoSchema",
+    # drf-spectacular, plus the 400/401/403/404 answers (tests/webapp/test_schemathesis.py).
+    "DEFAULT_SCHEMA_CLASS": "webapp.api.schema.ApiSchema",
 }
 SPECTACULAR_SETTINGS = {
     "TITLE": "Physio dashboard API",
@@ -210,4 +263,6 @@ LOGGING = {
     "disable_existing_loggers": False,
     "handlers": {"console": {"class": "logging.StreamHandler"}},
     "root": {"handlers": ["console"], "level": os.environ.get("LOG_LEVEL", "INFO")},
+    # django-axes reports every successful login at INFO; failures and lockouts are warnings.
+    "loggers": {"axes": {"level": os.environ.get("AXES_LOG_LEVEL", "WARNING")}},
 }

@@ -8,6 +8,7 @@ urlpatterns = [
     path("healthz", healthz, name="healthz"),
     path("accounts/", include("webapp.accounts.urls")),
     path("admin/", admin.site.urls),
+    path("audit/", include("webapp.audit.urls")),
     path("api/", include("webapp.api.urls")),
     path("patients/", include("webapp.patients.urls")),
     path("exercises/", include("webapp.exercises.urls")),

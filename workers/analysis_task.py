@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from django.conf import settings
 from django.core.files.base import ContentFile
-from django.db import transaction
+from django.db import InterfaceError, OperationalError, transaction
 
 from analysis import __version__ as code_version
 from analysis.bvh import read
@@ -20,28 +20,55 @@ from analysis.errors import AnalysisInputError
 from analysis.pipeline import analyse
 from webapp.patients.models import PerformanceLevel
 from webapp.recordings.models import AnalysisRun
+from webapp.recordings.storage import read_verified
 from workers import exercise_models, runs
 
 log = logging.getLogger(__name__)
 GENERIC_FAILURE = (
     "The analysis failed unexpectedly. The team has the details; please try again later."
 )
+# Errors that say nothing about the recording: the database or the disk was briefly away.
+TRANSIENT_ERRORS: tuple[type[BaseException], ...] = (OperationalError, InterfaceError, OSError)
+
+
+class TransientAnalysisError(Exception):
+    """The run could not go on for a passing reason; the task retries with the same lease."""
+
+    def __init__(self, run_id: str, token: str | None, cause: BaseException) -> None:
+        super().__init__(f"analysis {run_id} interrupted: {cause!r}")
+        self.token = token
 
 
 def worker_name() -> str:
     return socket.gethostname()
 
 
-def analyse_run(run_id: str) -> str:
-    """Run one analysis to its end. Returns the final status, or 'skipped' if not ours."""
-    token = runs.claim(run_id, worker_name())
-    if token is None:
-        return "skipped"
+def analyse_run(run_id: str, resume_token: str | None = None) -> str:
+    """Run one analysis to its end. Returns the final status, or 'skipped' if not ours.
+
+    A transient error (database or storage briefly unavailable) raises TransientAnalysisError
+    carrying the lease token, so the retried task resumes this claim rather than waiting for the
+    lease to expire.
+    """
+    token = None
+    try:
+        token = runs.claim(run_id, worker_name(), resume_token)
+        if token is None:
+            return "skipped"
+        return analyse_claimed(run_id, token)
+    except TRANSIENT_ERRORS as error:
+        log.warning("analysis %s interrupted, will retry: %r", run_id, error)
+        raise TransientAnalysisError(run_id, token or resume_token, error) from error
+
+
+def analyse_claimed(run_id: str, token: str) -> str:
     run = AnalysisRun.objects.select_related("recording__exercise", "recording__patient").get(
         pk=run_id
     )
     try:
         summary, arrays, model_row = compute(run, token)
+    except TRANSIENT_ERRORS:
+        raise
     except AnalysisInputError as error:
         runs.fail(run_id, token, str(error), traceback.format_exc())
         return "failed"
@@ -58,8 +85,7 @@ def compute(run: AnalysisRun, token: str) -> tuple[dict[str, Any], dict[str, np.
     if recording.exercise is None:
         raise AnalysisInputError("Choose the exercise of this recording before analysing it.")
     runs.report(str(run.pk), token, "loading", 2)
-    with recording.file.open("rb") as handle:
-        motion = read(handle.read())
+    motion = read(read_verified(recording))
     model_row, model = exercise_models.active_model(recording.exercise)
     history = previous_levels(recording)
 
@@ -96,21 +122,25 @@ def npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
 
 
 def store(run: AnalysisRun, token: str, summary: dict, arrays: dict, model_row) -> None:
+    """Write the arrays file, then the result in one transaction; no file outlives a failure."""
     name = f"{run.pk}.npz"
     stored = run.arrays.storage.save(f"runs/{name}", ContentFile(npz_bytes(arrays)))
-    with transaction.atomic():
-        finished = runs.succeed(
-            str(run.pk),
-            token,
-            summary=summary,
-            arrays=stored,
-            model=model_row,
-            code_version=code_version,
-        )
-        if finished:
-            save_levels(run, summary.get("gamma", {}))
-    if not finished:
-        run.arrays.storage.delete(stored)
+    finished = False
+    try:
+        with transaction.atomic():
+            finished = runs.succeed(
+                str(run.pk),
+                token,
+                summary=summary,
+                arrays=stored,
+                model=model_row,
+                code_version=code_version,
+            )
+            if finished:
+                save_levels(run, summary.get("gamma", {}))
+    finally:
+        if not finished:
+            run.arrays.storage.delete(stored)
 
 
 def save_levels(run: AnalysisRun, gamma: dict[str, float]) -> None:

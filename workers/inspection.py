@@ -6,12 +6,12 @@ from typing import Any
 
 from analysis.bvh import read
 from webapp.recordings.models import Recording
+from webapp.recordings.storage import read_verified
 
 
 def inspect_recording(recording_id: str) -> dict[str, Any]:
-    recording = Recording.objects.get(pk=recording_id)
-    with recording.file.open("rb") as handle:
-        motion = read(handle.read())
+    recording = Recording.all_objects.get(pk=recording_id)
+    motion = read(read_verified(recording))
     facts = {
         "n_frames": int(motion.frames.shape[0]),
         "n_joints": len(motion.skeleton.names),

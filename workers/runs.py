@@ -18,12 +18,18 @@ from django.utils import timezone
 from webapp.recordings.models import AnalysisRun, RunStatus
 
 
-def claim(run_id: str, worker: str) -> str | None:
-    """Take the run for this worker; return the lease token, or None if someone else has it."""
+def claim(run_id: str, worker: str, resume_token: str | None = None) -> str | None:
+    """Take the run for this worker; return the lease token, or None if someone else has it.
+
+    `resume_token`: the token of this task's earlier attempt (a retry after a transient error),
+    which may take the run back at once, before its lease expires.
+    """
     now = timezone.now()
     abandoned = now - timedelta(seconds=settings.ANALYSIS_LEASE_SECONDS)
     token = uuid.uuid4().hex
     claimable = Q(status=RunStatus.QUEUED) | Q(status=RunStatus.RUNNING, heartbeat_at__lt=abandoned)
+    if resume_token:
+        claimable |= Q(status=RunStatus.RUNNING, lease_token=resume_token)
     updated = AnalysisRun.objects.filter(claimable, pk=run_id).update(
         status=RunStatus.RUNNING,
         started_at=now,

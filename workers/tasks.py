@@ -21,10 +21,47 @@ def reap_stuck_runs() -> int:
     return housekeeping.reap_stuck_runs()
 
 
-@shared_task(name="workers.tasks.analyse_recording", autoretry_for=(OSError,), max_retries=3)
-def analyse_recording(run_id: str) -> str:
-    """Analyse the recording of one run; the run ends SUCCEEDED or FAILED with a reason."""
-    return analysis_task.analyse_run(run_id)
+# Transient failures retry after 1, 2, 4, 8, 16, 30, 30, 30 s: about two minutes in all, longer
+# than the lease, so even a claim whose reply was lost can be taken again by the last retries.
+TRANSIENT_RETRIES = 8
+
+
+def retry_delay(retries: int) -> int:
+    return min(2**retries, 30)
+
+
+@shared_task(
+    bind=True,
+    name="workers.tasks.analyse_recording",
+    max_retries=TRANSIENT_RETRIES,
+    ignore_result=True,
+)
+def analyse_recording(self, run_id: str, token: str | None = None) -> str:
+    """Analyse the recording of one run; the run ends SUCCEEDED or FAILED with a reason.
+
+    The run's state lives in the database, so no result is kept in the broker (which may restart
+    empty). A database or storage outage retries the task, resuming its own lease (`token`).
+    """
+    try:
+        return analysis_task.analyse_run(run_id, resume_token=token)
+    except analysis_task.TransientAnalysisError as failure:
+        raise self.retry(
+            kwargs={"run_id": run_id, "token": failure.token},
+            countdown=retry_delay(self.request.retries),
+            exc=failure,
+        ) from failure
+
+
+@shared_task(name="workers.tasks.requeue_lost_runs", ignore_result=True)
+def requeue_lost_runs() -> dict[str, int]:
+    """Enqueue again runs QUEUED for too long (their message was lost); fail hopeless ones."""
+    return housekeeping.requeue_lost_runs()
+
+
+@shared_task(name="workers.tasks.purge_deleted_patients", ignore_result=True)
+def purge_deleted_patients() -> int:
+    """Hard-delete patients soft-deleted longer ago than PATIENT_RETENTION_DAYS, with files."""
+    return housekeeping.purge_deleted_patients()
 
 
 @shared_task(name="workers.tasks.build_exercise_model")

@@ -25,6 +25,7 @@ from webapp.recordings.models import (
     LandmarkCorrection,
     RepetitionLabel,
 )
+from webapp.recordings.storage import read_verified
 
 MIN_PER_CLASS = 2
 
@@ -56,8 +57,7 @@ def training_recording(run: AnalysisRun) -> TrainingRecording:
     else:
         marks = run.summary.get("landmarks", [])
         frames, types = [m["frame"] for m in marks], [m["type"] for m in marks]
-    with run.recording.file.open("rb") as handle:
-        motion = read(handle.read())
+    motion = read(read_verified(run.recording))
     return TrainingRecording(motion, tuple(frames), tuple(types), run_label(run))
 
 

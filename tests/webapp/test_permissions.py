@@ -2,81 +2,122 @@
 
 Objects of another clinic (or another patient's) answer 404 so their existence is not revealed;
 actions a role may not take answer 403; anonymous visitors are sent to the login page (pages) or
-get 401 (API).
+get 401 (API). The routes come from the URL resolver: a route without a row here fails
+`test_matrix_covers_every_route`, and Django's admin site is checked route by route.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import pytest
-from django.urls import reverse
+from django.test import Client
+from django.urls import URLPattern, URLResolver, get_resolver, reverse
 
 from tests.personas import make_exercise, make_recording
+from webapp.accounts.tokens import issue_token
 
-PERSONAS = ("therapist", "colleague", "outsider", "patient", "other_patient", "anonymous")
+PERSONAS = (
+    "therapist",
+    "colleague",
+    "clinic_admin",
+    "outsider",
+    "patient",
+    "other_patient",
+    "anonymous",
+)
+Statuses = tuple[int, int, int, int, int, int, int]  # in PERSONAS order
 
 
 @dataclass(frozen=True)
 class Case:
     name: str
-    target: str | None  # which object's pk the URL takes
+    target: str | None  # which object the URL names (see `url_kwargs`)
     method: str
-    expected: tuple[int, int, int, int, int, int]  # in PERSONAS order
+    expected: Statuses
 
 
-STAFF_ONLY_OBJECT = (200, 200, 404, 403, 403, 302)
-OWN_OBJECT = (200, 200, 404, 200, 404, 302)
-OWN_API_OBJECT = (200, 200, 404, 200, 404, 401)
+EVERYONE_200: Statuses = (200, 200, 200, 200, 200, 200, 200)
+STAFF_PAGE: Statuses = (200, 200, 200, 200, 403, 403, 302)
+SIGNED_IN_PAGE: Statuses = (200, 200, 200, 200, 200, 200, 302)
+STAFF_ONLY_OBJECT: Statuses = (200, 200, 200, 404, 403, 403, 302)
+OWN_OBJECT: Statuses = (200, 200, 200, 404, 200, 404, 302)
+OWN_API_OBJECT: Statuses = (200, 200, 200, 404, 200, 404, 401)
+OWN_REPORT_PDF: Statuses = (202, 202, 202, 404, 202, 404, 302)
+OWN_API_REPORT: Statuses = (202, 202, 202, 404, 202, 404, 401)
 
 CASES = [
-    Case("dashboard:home", None, "get", (200, 200, 200, 200, 200, 302)),
-    Case("patients:list", None, "get", (200, 200, 200, 403, 403, 302)),
-    Case("patients:create", None, "get", (200, 200, 200, 403, 403, 302)),
+    Case("healthz", None, "get", EVERYONE_200),
+    # Accounts. A signed-in visitor of the login page is sent on to the dashboard.
+    Case("accounts:login", None, "get", (302, 302, 302, 302, 302, 302, 200)),
+    Case("accounts:logout", None, "post", (302, 302, 302, 302, 302, 302, 302)),
+    Case("accounts:password-change", None, "get", SIGNED_IN_PAGE),
+    Case("accounts:password-changed", None, "get", SIGNED_IN_PAGE),
+    Case("accounts:password-reset", None, "get", EVERYONE_200),
+    Case("accounts:password-reset-sent", None, "get", EVERYONE_200),
+    # A forged reset link shows the "invalid link" page (200) and changes nothing.
+    Case("accounts:password-reset-confirm", "reset", "get", EVERYONE_200),
+    Case("accounts:password-reset-complete", None, "get", EVERYONE_200),
+    Case("accounts:2fa-setup", None, "get", STAFF_PAGE),
+    Case("accounts:2fa-verify", None, "get", SIGNED_IN_PAGE),
+    Case("accounts:tokens", None, "get", STAFF_PAGE),
+    # The therapist's token: they and the clinic admin may revoke it, a colleague cannot see it.
+    Case("accounts:token-revoke", "token", "post", (302, 404, 302, 404, 403, 403, 302)),
+    Case("audit:events", None, "get", (403, 403, 200, 403, 403, 403, 302)),
+    Case("dashboard:home", None, "get", SIGNED_IN_PAGE),
+    Case("patients:list", None, "get", STAFF_PAGE),
+    Case("patients:create", None, "get", STAFF_PAGE),
     Case("patients:detail", "patient", "get", OWN_OBJECT),
     Case("patients:edit", "patient", "get", STAFF_ONLY_OBJECT),
     Case("patients:prescribe", "patient", "get", STAFF_ONLY_OBJECT),
-    Case("patients:archive", "patient", "post", (302, 302, 404, 403, 403, 302)),
+    Case("patients:archive", "patient", "post", (302, 302, 302, 404, 403, 403, 302)),
     Case("patients:progress", "patient", "get", OWN_OBJECT),
     Case("patients:history-csv", "patient", "get", OWN_OBJECT),
-    Case("exercises:list", None, "get", (200, 200, 200, 403, 403, 302)),
-    Case("exercises:create", None, "get", (200, 200, 200, 403, 403, 302)),
+    Case("exercises:list", None, "get", STAFF_PAGE),
+    Case("exercises:create", None, "get", STAFF_PAGE),
     Case("exercises:detail", "exercise", "get", STAFF_ONLY_OBJECT),
     Case("exercises:model-status", "exercise", "get", STAFF_ONLY_OBJECT),
     Case("exercises:tutor-data", "exercise", "get", STAFF_ONLY_OBJECT),
     Case("exercises:annotate", "exercise", "get", STAFF_ONLY_OBJECT),
     # Empty POSTs: staff get the validation answer (400), others 403/404/login.
-    Case("exercises:landmarks", "exercise", "post", (400, 400, 404, 403, 403, 302)),
-    Case("exercises:grammar", "exercise", "post", (400, 400, 404, 403, 403, 302)),
-    Case("exercises:build", "exercise", "post", (302, 302, 404, 403, 403, 302)),
-    Case("recordings:upload", None, "get", (200, 200, 200, 200, 200, 302)),
+    Case("exercises:landmarks", "exercise", "post", (400, 400, 400, 404, 403, 403, 302)),
+    Case("exercises:grammar", "exercise", "post", (400, 400, 400, 404, 403, 403, 302)),
+    Case("exercises:build", "exercise", "post", (302, 302, 302, 404, 403, 403, 302)),
+    Case("recordings:upload", None, "get", SIGNED_IN_PAGE),
     Case("recordings:detail", "recording", "get", OWN_OBJECT),
     Case("recordings:status", "recording", "get", OWN_OBJECT),
-    Case("recordings:rerun", "recording", "post", (302, 302, 404, 403, 403, 302)),
+    Case("recordings:rerun", "recording", "post", (302, 302, 302, 404, 403, 403, 302)),
     Case("recordings:result", "recording", "get", OWN_OBJECT),
     Case("recordings:corrections", "recording", "get", STAFF_ONLY_OBJECT),
     # The recording's exercise is set, so confirming redirects to the recording.
-    Case("recordings:confirm", "recording", "get", (302, 302, 404, 302, 404, 302)),
-    Case("api-patients", None, "get", (200, 200, 200, 200, 200, 401)),
+    Case("recordings:confirm", "recording", "get", (302, 302, 302, 404, 302, 404, 302)),
+    # The token endpoint takes no session; an empty form is a 400 for everyone.
+    Case("api-token", None, "post", (400, 400, 400, 400, 400, 400, 400)),
+    Case("api-patients", None, "get", (200, 200, 200, 200, 200, 200, 401)),
     Case("api-patient", "patient", "get", OWN_API_OBJECT),
     Case("api-patient-recordings", "patient", "get", OWN_API_OBJECT),
     Case("api-patient-progress", "patient", "get", OWN_API_OBJECT),
     Case("api-patient-prescriptions", "patient", "get", OWN_API_OBJECT),
-    Case("api-exercises", None, "get", (200, 200, 200, 200, 200, 401)),
+    Case("api-exercises", None, "get", (200, 200, 200, 200, 200, 200, 401)),
+    # An empty upload names no patient: 400 for anyone signed in.
+    Case("api-recordings", None, "post", (400, 400, 400, 400, 400, 400, 401)),
     Case("api-recording", "recording", "get", OWN_API_OBJECT),
     Case("api-recording-result", "recording", "get", OWN_API_OBJECT),
-    Case("api-recording-corrections", "recording", "get", (200, 200, 404, 403, 404, 401)),
-    Case("api-recording-confirm", "recording", "post", (400, 400, 404, 400, 404, 401)),
-    Case("api-schema", None, "get", (200, 200, 200, 200, 200, 401)),
+    Case("api-recording-corrections", "recording", "get", (200, 200, 200, 404, 403, 404, 401)),
+    Case("api-recording-confirm", "recording", "post", (400, 400, 400, 404, 400, 404, 401)),
+    Case("api-schema", None, "get", (200, 200, 200, 200, 200, 200, 401)),
+    # The Swagger page is static; the schema it loads (api-schema) needs a sign-in or a token.
+    Case("api-docs", None, "get", EVERYONE_200),
     Case("reports:playback", "recording", "get", OWN_OBJECT),
-    Case("reports:playback-bin", "recording", "get", (409, 409, 404, 409, 404, 302)),
-    Case("reports:recording-pdf", "recording", "get", (202, 202, 404, 202, 404, 302)),
+    Case("reports:playback-bin", "recording", "get", (409, 409, 409, 404, 409, 404, 302)),
+    Case("reports:recording-pdf", "recording", "get", OWN_REPORT_PDF),
     Case("reports:recording-print", "recording", "get", OWN_OBJECT),
     Case("reports:progress", "patient", "get", OWN_OBJECT),
-    Case("reports:progress-pdf", "patient", "get", (202, 202, 404, 202, 404, 302)),
+    Case("reports:progress-pdf", "patient", "get", OWN_REPORT_PDF),
     Case("reports:progress-print", "patient", "get", OWN_OBJECT),
-    Case("reports:api-recording-report", "recording", "get", (202, 202, 404, 202, 404, 401)),
-    Case("reports:api-progress-report", "patient", "get", (202, 202, 404, 202, 404, 401)),
+    Case("reports:api-recording-report", "recording", "get", OWN_API_REPORT),
+    Case("reports:api-progress-report", "patient", "get", OWN_API_REPORT),
 ]
 
 
@@ -84,49 +125,133 @@ CASES = [
 def objects(world):
     exercise = make_exercise(world.clinic)
     recording = make_recording(world.patient, exercise)
-    return {"patient": world.patient, "exercise": exercise, "recording": recording}
+    token, _ = issue_token(world.therapist, "practice system")
+    return {"patient": world.patient, "exercise": exercise, "recording": recording, "token": token}
 
 
-def log_in(client, world, persona: str) -> None:
-    users = {
-        "therapist": world.therapist,
-        "colleague": world.colleague,
-        "outsider": world.outsider,
-        "patient": world.patient_user,
-        "other_patient": world.other_patient_user,
-    }
-    if persona in users:
-        client.force_login(users[persona])
+def url_kwargs(target: str | None, objects: dict) -> dict:
+    if target is None:
+        return {}
+    if target == "reset":
+        return {"uidb64": "MQ", "token": "forged-reset-token"}
+    return {"pk": objects[target].pk}
 
 
-@pytest.mark.parametrize("persona", PERSONAS)
+def user_of(world, persona: str):
+    return None if persona == "anonymous" else getattr(world, PERSONA_USERS[persona])
+
+
+PERSONA_USERS = {
+    "therapist": "therapist",
+    "colleague": "colleague",
+    "clinic_admin": "clinic_admin",
+    "outsider": "outsider",
+    "patient": "patient_user",
+    "other_patient": "other_patient_user",
+}
+
+
+def status_for(world, persona: str, method: str, url: str) -> int:
+    client = Client()
+    user = user_of(world, persona)
+    if user is not None:
+        client.force_login(user)
+    return getattr(client, method)(url).status_code
+
+
 @pytest.mark.parametrize("case", CASES, ids=lambda case: case.name)
-def test_access(client, world, objects, case: Case, persona: str):
-    kwargs = {"pk": objects[case.target].pk} if case.target else {}
-    url = reverse(case.name, kwargs=kwargs)
-    log_in(client, world, persona)
-    response = getattr(client, case.method)(url)
-    expected = case.expected[PERSONAS.index(persona)]
-    assert response.status_code == expected, f"{persona} {case.method.upper()} {url}"
-
-
-def test_matrix_covers_every_named_route():
-    from django.urls import get_resolver
-
-    covered = {case.name for case in CASES}
-    exempt = {
-        "healthz",
-        "api-token",
-        "api-docs",
-        "api-recordings",
-        "accounts",
-        "admin",
+def test_access(world, objects, case: Case):
+    """One route, every persona (one world per route keeps the matrix fast)."""
+    url = reverse(case.name, kwargs=url_kwargs(case.target, objects))
+    answers = {p: status_for(world, p, case.method, url) for p in PERSONAS}
+    expected = dict(zip(PERSONAS, case.expected, strict=True))
+    wrong = {
+        p: f"got {answers[p]}, expected {expected[p]}"
+        for p in PERSONAS
+        if answers[p] != expected[p]
     }
-    names = set()
-    for pattern in get_resolver().url_patterns:
-        for sub in getattr(pattern, "url_patterns", [pattern]):
-            namespace = getattr(pattern, "namespace", None)
-            if getattr(sub, "name", None) and namespace not in {"admin", "accounts"}:
-                names.add(f"{namespace}:{sub.name}" if namespace else sub.name)
-    missing = sorted(names - covered - exempt)
+    assert wrong == {}, f"{case.method.upper()} {url}"
+
+
+def walk_routes(patterns, namespace: str | None = None, prefix: str = ""):
+    """(qualified name or None, full route) of every URL pattern, through nested includes."""
+    for pattern in patterns:
+        if isinstance(pattern, URLResolver):
+            inner = ":".join(part for part in (namespace, pattern.namespace) if part) or None
+            yield from walk_routes(pattern.url_patterns, inner, prefix + str(pattern.pattern))
+        elif isinstance(pattern, URLPattern):
+            name = pattern.name and (f"{namespace}:{pattern.name}" if namespace else pattern.name)
+            yield name, prefix + str(pattern.pattern)
+
+
+def all_routes() -> list[tuple[str | None, str]]:
+    return list(walk_routes(get_resolver().url_patterns))
+
+
+def is_admin(route: str) -> bool:
+    return route.startswith("admin/")
+
+
+def test_matrix_covers_every_route():
+    """Every route (pages, API, router-generated, unnamed) is in CASES or is an admin route."""
+    covered = {case.name for case in CASES}
+    missing = sorted(
+        name or route for name, route in all_routes() if not is_admin(route) and name not in covered
+    )
     assert missing == []
+    assert len(covered) == len(CASES), "a route appears twice in CASES"
+
+
+PARAMETER = re.compile(r"<(?:(?P<converter>\w+):)?(?P<name>\w+)>|\(\?P<(?P<group>\w+)>[^)]*\)")
+
+
+def test_object_ids_in_urls_are_not_guessable():
+    """Outside the staff-only admin site, objects are named by UUID (or a signed reset token)."""
+    weak = []
+    for name, route in all_routes():
+        if is_admin(route):
+            continue
+        for match in PARAMETER.finditer(route):
+            signed = match["name"] in {"uidb64", "token"}
+            if match["converter"] != "uuid" and not signed:
+                weak.append(f"{name}: {match.group(0)}")
+    assert weak == []
+
+
+# Sample values for admin route parameters; any other parameter (ids of one model or another) is 1.
+ADMIN_SAMPLES = {"app_label": "accounts", "url": "x"}
+
+
+def admin_url(route: str) -> str:
+    def sample(match: re.Match) -> str:
+        return ADMIN_SAMPLES.get(match["name"] or match["group"], "1")
+
+    return "/" + PARAMETER.sub(sample, route).strip("^$")
+
+
+def admin_answer_is_closed(url: str, response) -> bool:
+    if url == "/admin/login/":
+        return response.status_code == 200  # the form; signing in needs a staff account
+    if url == "/admin/logout/":
+        return response.status_code in (200, 302)  # signing out is harmless
+    return response.status_code == 302 and "/admin/login/" in response["Location"]
+
+
+def test_admin_site_is_closed_to_every_persona(world, objects):
+    """No persona is Django staff: every admin route sends each of them to the admin login."""
+    # Signing out is checked last, so each persona keeps one session for all the other routes.
+    urls = sorted(
+        (admin_url(route) for _, route in all_routes() if is_admin(route)),
+        key=lambda url: url == "/admin/logout/",
+    )
+    assert len(urls) > 40  # the admin of every registered model is in the walk
+    wrong = []
+    for persona in PERSONAS:
+        client = Client()
+        if (user := user_of(world, persona)) is not None:
+            client.force_login(user)
+        for url in urls:
+            response = client.post(url) if url == "/admin/logout/" else client.get(url)
+            if not admin_answer_is_closed(url, response):
+                wrong.append(f"{persona} {url} → {response.status_code}")
+    assert wrong == []

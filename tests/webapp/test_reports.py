@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from django.core.files.base import ContentFile
 from django.urls import reverse
-from rest_framework.authtoken.models import Token
 
 from tests.personas import make_exercise, make_recording
 from webapp.recordings.models import RunStatus
@@ -127,16 +126,18 @@ def test_task_renders_progress_report(world, recording, settings):
 
 def test_api_report_with_token(client, world, recording, django_capture_on_commit_callbacks):
     analysed(recording)
-    token = Token.objects.create(user=world.therapist)
+    from webapp.accounts.tokens import issue_token
+
+    _, key = issue_token(world.therapist, "test")
     url = reverse("reports:api-recording-report", kwargs={"pk": recording.pk})
-    headers = {"HTTP_AUTHORIZATION": f"Token {token.key}"}
+    headers = {"HTTP_AUTHORIZATION": f"Token {key}"}
     with django_capture_on_commit_callbacks(execute=True):
         assert client.get(url, **headers).status_code == 202
     response = client.get(url, **headers)
     assert response.status_code == 200
     assert b"".join(response.streaming_content).startswith(b"%PDF")
-    outsider = Token.objects.create(user=world.outsider)
-    assert client.get(url, HTTP_AUTHORIZATION=f"Token {outsider.key}").status_code == 404
+    _, outsider_key = issue_token(world.outsider, "test")
+    assert client.get(url, HTTP_AUTHORIZATION=f"Token {outsider_key}").status_code == 404
 
 
 def test_printable_pages_show_scores_and_feedback(client, world, recording):

@@ -5,7 +5,13 @@ from django.utils import timezone
 
 from tests.personas import make_world
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
-from workers.housekeeping import REAPED_USER_MESSAGE, reap_stuck_runs, reap_window_seconds
+from workers.housekeeping import (
+    NEVER_STARTED_MESSAGE,
+    REAPED_USER_MESSAGE,
+    reap_stuck_runs,
+    reap_window_seconds,
+    requeue_lost_runs,
+)
 
 
 @pytest.fixture
@@ -47,3 +53,30 @@ def test_reaper_leaves_killed_runs_to_the_redelivery(recording, settings):
     started = timezone.now() - timedelta(seconds=500)
     AnalysisRun.objects.create(recording=recording, status=RunStatus.RUNNING, started_at=started)
     assert reap_stuck_runs() == 0
+
+
+def test_lost_queued_runs_are_enqueued_again_then_failed(recording, settings, monkeypatch):
+    """A QUEUED run whose message vanished (broker restarted empty) is enqueued again; one
+    that was enqueued `ANALYSIS_MAX_ENQUEUES` times already fails with a reason."""
+    from workers import tasks
+
+    sent: list[str] = []
+    monkeypatch.setattr(tasks.analyse_recording, "delay", sent.append)
+    settings.ANALYSIS_REQUEUE_AFTER_SECONDS = 600
+    settings.ANALYSIS_MAX_ENQUEUES = 3
+    long_ago = timezone.now() - timedelta(seconds=700)
+    lost = AnalysisRun.objects.create(recording=recording, enqueued_at=long_ago)
+    hopeless = AnalysisRun.objects.create(
+        recording=recording, enqueued_at=long_ago, enqueue_count=3
+    )
+    waiting = AnalysisRun.objects.create(recording=recording)
+
+    assert requeue_lost_runs() == {"requeued": 1, "failed": 1}
+    assert sent == [str(lost.pk)]
+    lost.refresh_from_db()
+    hopeless.refresh_from_db()
+    waiting.refresh_from_db()
+    assert lost.status == RunStatus.QUEUED and lost.enqueue_count == 2
+    assert hopeless.status == RunStatus.FAILED and hopeless.user_error == NEVER_STARTED_MESSAGE
+    assert waiting.status == RunStatus.QUEUED and waiting.enqueue_count == 1
+    assert requeue_lost_runs() == {"requeued": 0, "failed": 0}

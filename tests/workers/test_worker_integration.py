@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from hashlib import sha256
 from pathlib import Path
 
 import pytest
@@ -21,7 +22,10 @@ pytestmark = [pytest.mark.integration, needs_services, pytest.mark.django_db(tra
 def make_recording() -> Recording:
     world = make_world()
     recording = Recording(
-        clinic=world.clinic, patient=world.patient, checksum="x", uploaded_by=world.therapist
+        clinic=world.clinic,
+        patient=world.patient,
+        checksum=sha256(FIXTURE.read_bytes()).hexdigest(),
+        uploaded_by=world.therapist,
     )
     recording.file.save("m01.bvh.gz", ContentFile(FIXTURE.read_bytes()), save=True)
     return recording

@@ -16,7 +16,7 @@ from django.db.models import QuerySet
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import get_object_or_404
 
-from webapp.accounts.models import User
+from webapp.accounts.models import Role, User
 from webapp.audit import log
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
@@ -79,6 +79,18 @@ def require_staff(view: Callable[..., HttpResponse]) -> Callable[..., HttpRespon
     def wrapped(request: HttpRequest, *args: Any, **kwargs: Any) -> HttpResponse:
         if not request.user.is_staff_member or request.user.clinic_id is None:
             raise PermissionDenied("Only clinic staff can do this.")
+        return view(request, *args, **kwargs)
+
+    return wrapped
+
+
+def require_clinic_admin(view: Callable[..., HttpResponse]) -> Callable[..., HttpResponse]:
+    """Only the clinic's admins (therapists and patients get 403)."""
+
+    @wraps(view)
+    def wrapped(request: HttpRequest, *args: Any, **kwargs: Any) -> HttpResponse:
+        if request.user.role != Role.CLINIC_ADMIN or request.user.clinic_id is None:
+            raise PermissionDenied("Only the clinic admin can do this.")
         return view(request, *args, **kwargs)
 
     return wrapped

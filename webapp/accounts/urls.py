@@ -1,7 +1,7 @@
 from django.contrib.auth import views as auth_views
 from django.urls import path, reverse_lazy
 
-from webapp.accounts import two_factor
+from webapp.accounts import token_views, two_factor
 
 app_name = "accounts"
 
@@ -49,4 +49,6 @@ urlpatterns = [
     ),
     path("2fa/setup/", two_factor.setup, name="2fa-setup"),
     path("2fa/verify/", two_factor.verify, name="2fa-verify"),
+    path("tokens/", token_views.token_list, name="tokens"),
+    path("tokens/<uuid:pk>/revoke/", token_views.token_revoke, name="token-revoke"),
 ]

@@ -1,12 +1,12 @@
 from django.urls import path
 from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerView
-from rest_framework.authtoken.views import obtain_auth_token
 from rest_framework.permissions import IsAuthenticated
 
+from webapp.accounts.tokens import obtain_token
 from webapp.api import views
 
 urlpatterns = [
-    path("v1/auth/token/", obtain_auth_token, name="api-token"),
+    path("v1/auth/token/", obtain_token, name="api-token"),
     path("v1/patients/", views.PatientList.as_view(), name="api-patients"),
     path("v1/patients/<uuid:pk>/", views.PatientDetail.as_view(), name="api-patient"),
     path(

@@ -3,10 +3,11 @@ from __future__ import annotations
 from django.core.exceptions import ValidationError as DjangoValidationError
 from django.http import Http404
 from django.utils.dateparse import parse_date
+from drf_spectacular.types import OpenApiTypes
 from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import generics, status
 from rest_framework.exceptions import PermissionDenied, ValidationError
-from rest_framework.parsers import FormParser, MultiPartParser
+from rest_framework.parsers import MultiPartParser
 from rest_framework.request import Request
 from rest_framework.response import Response
 from rest_framework.views import APIView
@@ -35,8 +36,8 @@ from webapp.recordings.results import result_data
 from webapp.recordings.uploads import check_skeleton, store_recording, suggest_exercise
 
 DATE_FILTERS = [
-    OpenApiParameter("since", str, description="ISO date: only on or after this day"),
-    OpenApiParameter("until", str, description="ISO date: only on or before this day"),
+    OpenApiParameter("since", OpenApiTypes.DATE, description="only on or after this day"),
+    OpenApiParameter("until", OpenApiTypes.DATE, description="only on or before this day"),
 ]
 
 
@@ -103,7 +104,8 @@ class ExerciseList(generics.ListAPIView):
 
 
 class RecordingCreate(APIView):
-    parser_classes = [MultiPartParser, FormParser]
+    # Multipart only: a url-encoded form cannot carry the file, so the schema must not offer it.
+    parser_classes = [MultiPartParser]
 
     @extend_schema(request=RecordingUploadSerializer, responses={201: RecordingSerializer})
     def post(self, request: Request) -> Response:

@@ -15,6 +15,16 @@ class AppendOnlyError(RuntimeError):
     pass
 
 
+class AuditEventQuerySet(models.QuerySet):
+    """Bulk changes bypass `Model.save`/`delete`: refuse them too."""
+
+    def update(self, **kwargs):
+        raise AppendOnlyError("Audit events cannot be changed.")
+
+    def delete(self):
+        raise AppendOnlyError("Audit events cannot be deleted.")
+
+
 class AuditEvent(models.Model):
     class Action(models.TextChoices):
         READ = "read", "Read"
@@ -35,13 +45,17 @@ class AuditEvent(models.Model):
     path = models.CharField(max_length=300)
     ip_address = models.GenericIPAddressField(null=True)
     at = models.DateTimeField(auto_now_add=True, db_index=True)
+    # How the request came in: "web" (session) or "token <prefix>" (API token).
+    via = models.CharField(max_length=40, blank=True)
+
+    objects = AuditEventQuerySet.as_manager()
 
     class Meta:
         ordering = ["-at"]
         indexes = [models.Index(fields=["clinic", "-at"])]
 
     def save(self, *args, **kwargs):
-        if self.pk is not None:
+        if self.pk is not None or not self._state.adding:
             raise AppendOnlyError("Audit events cannot be changed.")
         super().save(*args, **kwargs)
 

@@ -6,9 +6,9 @@ from django.shortcuts import render
 from django.views.decorators.cache import never_cache
 from django.views.decorators.http import require_GET
 
+from webapp.accounts.permissions import visible_patients
 from webapp.dashboard import health
-from webapp.exercises.models import Exercise
-from webapp.patients.models import Patient
+from webapp.dashboard import home as parts
 
 
 @require_GET
@@ -21,12 +21,28 @@ def healthz(request: HttpRequest) -> JsonResponse:
     return JsonResponse(body, status=200 if healthy else 503)
 
 
+@require_GET
+@never_cache
 @login_required
 def home(request: HttpRequest) -> HttpResponse:
+    """The therapist's (or patient's) home; `?format=json` is what the page polls for live parts."""
     user = request.user
-    patients = Patient.objects.filter(clinic=user.clinic, archived_at__isnull=True)
+    if request.GET.get("format") == "json":
+        return JsonResponse(parts.live_json(user))
+    context = {
+        "recent": parts.recent_recordings(user),
+        "active": parts.active_runs(user),
+        "active_limit": parts.ACTIVE_RUNS,
+    }
     if user.is_patient:
-        patients = patients.filter(user=user)
-    exercises = Exercise.objects.filter(clinic=user.clinic, archived_at__isnull=True)
-    context = {"patients": patients[:20], "exercises": exercises}
+        return render(request, "dashboard/patient_home.html", context | patient_context(user))
+    context["attention"] = parts.attention_page(user, request.GET.get("attention_page"))
+    context["my_patients"] = parts.my_patients(user)
     return render(request, "dashboard/home.html", context)
+
+
+def patient_context(user) -> dict:
+    patient = visible_patients(user).first()
+    if patient is None:
+        return {"patient": None, "prescriptions": []}
+    return {"patient": patient, "prescriptions": parts.patient_prescriptions(patient)}

@@ -3,7 +3,7 @@ from __future__ import annotations
 from django.contrib import messages
 from django.contrib.auth.decorators import login_required
 from django.core.paginator import Paginator
-from django.db.models import Q
+from django.db.models import Prefetch, Q
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import redirect, render
 from django.utils import timezone
@@ -13,6 +13,7 @@ from webapp.accounts.permissions import get_patient_for_user, require_staff, vis
 from webapp.patients.adherence import adherence
 from webapp.patients.forms import PatientForm, PrescriptionForm
 from webapp.patients.models import Patient
+from webapp.recordings.models import AnalysisRun
 
 PAGE_SIZE = 25
 
@@ -44,7 +45,9 @@ def patient_detail(request: HttpRequest, pk) -> HttpResponse:
     context = {
         "patient": patient,
         "prescriptions": with_adherence(patient),
-        "recordings": patient.recordings.select_related("exercise").prefetch_related("runs")[:50],
+        "recordings": patient.recordings.select_related("exercise").prefetch_related(
+            Prefetch("runs", queryset=AnalysisRun.objects.only("recording", "status"))
+        )[:50],  # the page shows each run's status: never load the summaries (10–20 kB each)
         "levels": patient.levels.select_related("exercise").order_by("exercise__name", "joint"),
     }
     return render(request, "patients/detail.html", context)

@@ -52,4 +52,8 @@ class UploadForm(forms.Form):
                 check_skeleton(self.parsed.motion, exercise)
         except ValidationError as error:
             self.add_error("file", error)
+        if self.errors:
+            # A refused upload's recording (up to the upload caps, tens of MB) is not needed: drop
+            # it now. The form is a reference cycle, freed only when the cyclic collector runs.
+            self.parsed = None
         return cleaned

@@ -2,7 +2,11 @@
 
 Run status transitions: QUEUED → RUNNING (claimed by one worker with a conditional UPDATE)
 → SUCCEEDED | FAILED. A run stuck in RUNNING past its time limit is reaped by the beat task.
-Runs are immutable history: re-analysis makes a new run.
+Runs are immutable history: re-analysis makes a new run. A QUEUED run whose broker message was
+lost (Redis restarted empty) is enqueued again by the beat task, a few times, then FAILED.
+
+Every stored upload keeps its SHA-256 `checksum`; `webapp.recordings.storage.read_verified`
+checks it on every read and marks the recording damaged on a mismatch.
 """
 
 from __future__ import annotations
@@ -11,8 +15,16 @@ import uuid
 
 from django.conf import settings
 from django.db import models
+from django.utils import timezone
 
 from webapp.accounts.models import Clinic
+
+
+class LiveRecordingManager(models.Manager):
+    """The default manager hides the recordings of soft-deleted patients, like the patients."""
+
+    def get_queryset(self):
+        return super().get_queryset().filter(patient__deleted_at__isnull=True)
 
 
 class Recording(models.Model):
@@ -47,10 +59,20 @@ class Recording(models.Model):
         "exercises.Exercise", on_delete=models.SET_NULL, null=True, blank=True, related_name="+"
     )
     suggestion_distance = models.FloatField(null=True, blank=True)
+    # Set when the stored file no longer matches `checksum` (or is missing) on a read.
+    damaged_at = models.DateTimeField(null=True, blank=True)
+    damage = models.CharField(max_length=300, blank=True)
+
+    objects = LiveRecordingManager()
+    all_objects = models.Manager()
 
     class Meta:
         ordering = ["-uploaded_at"]
-        indexes = [models.Index(fields=["patient", "exercise", "uploaded_at"])]
+        indexes = [
+            models.Index(fields=["patient", "exercise", "uploaded_at"]),
+            # A patient's history, newest first, read page by page (patient page, API).
+            models.Index(fields=["patient", "-uploaded_at"], name="recording_patient_newest"),
+        ]
 
 
 class RunStatus(models.TextChoices):
@@ -78,6 +100,9 @@ class AnalysisRun(models.Model):
     lease_token = models.CharField(max_length=64, blank=True)
     heartbeat_at = models.DateTimeField(null=True, blank=True)
     created_at = models.DateTimeField(auto_now_add=True)
+    # When its message was last handed to the broker, and how many times (see housekeeping).
+    enqueued_at = models.DateTimeField(default=timezone.now)
+    enqueue_count = models.PositiveSmallIntegerField(default=1)
     started_at = models.DateTimeField(null=True, blank=True)
     finished_at = models.DateTimeField(null=True, blank=True)
     user_error = models.TextField(blank=True)
@@ -87,7 +112,12 @@ class AnalysisRun(models.Model):
 
     class Meta:
         ordering = ["-created_at"]
-        indexes = [models.Index(fields=["recording", "-created_at"])]
+        indexes = [
+            models.Index(fields=["recording", "-created_at"]),
+            # Runs in one state by age (queued/running for the dashboard and the reaper, recent
+            # failures): without it a large clinic scans every run.
+            models.Index(fields=["status", "created_at"], name="run_status_created"),
+        ]
 
 
 class LandmarkCorrection(models.Model):

@@ -2,19 +2,33 @@
 
 from __future__ import annotations
 
+import logging
+
 from django.db import transaction
+from kombu.exceptions import OperationalError as BrokerUnavailable
 
 from webapp.recordings.models import AnalysisRun, Recording
+
+log = logging.getLogger(__name__)
 
 
 def start_analysis(recording: Recording) -> AnalysisRun:
     """Create a QUEUED run and enqueue its analysis once the transaction commits."""
-    from workers.tasks import analyse_recording
-
     run = AnalysisRun.objects.create(recording=recording)
     run_id = str(run.pk)
-    transaction.on_commit(lambda: analyse_recording.delay(run_id))
+    transaction.on_commit(lambda: enqueue_analysis(run_id))
     return run
+
+
+def enqueue_analysis(run_id: str) -> None:
+    """Hand the run to the broker; if it is down, the upload still stands (already committed):
+    the run stays QUEUED and the beat task `requeue_lost_runs` enqueues it later."""
+    from workers.tasks import analyse_recording
+
+    try:
+        analyse_recording.delay(run_id)
+    except (BrokerUnavailable, OSError):
+        log.warning("broker unavailable; run %s waits for the requeue task", run_id, exc_info=True)
 
 
 def confirm_exercise(recording: Recording, exercise) -> AnalysisRun | None:

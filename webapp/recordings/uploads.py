@@ -30,6 +30,10 @@ from webapp.recordings.models import AnalysisRun, Recording
 log = logging.getLogger(__name__)
 MIN_FRAMES = 10
 ACCEPTED_SUFFIXES = (".bvh", ".bvh.gz")
+# Caps for untrusted files, far above a clinical recording (a 30-minute UI-PRMD session at 30 fps
+# is 3.7 M values, 33 MB of text): they bound one upload's memory (~0.3 GB) and time (~1 s).
+MAX_DECOMPRESSED_BYTES = 96 << 20
+MAX_FRAME_VALUES = 8_000_000
 
 
 @dataclass(frozen=True)
@@ -58,7 +62,11 @@ def parse_upload(upload: UploadedFile) -> ParsedUpload:
     if len(content) > settings.MAX_UPLOAD_BYTES:
         raise ValidationError("The file is larger than the upload limit.")
     try:
-        motion = read(content)
+        motion = read(
+            content,
+            max_bytes=getattr(settings, "MAX_UPLOAD_DECOMPRESSED_BYTES", MAX_DECOMPRESSED_BYTES),
+            max_values=getattr(settings, "MAX_UPLOAD_FRAME_VALUES", MAX_FRAME_VALUES),
+        )
     except (BVHError, gzip.BadGzipFile, EOFError, UnicodeDecodeError) as error:
         raise ValidationError(f"This is not a readable BVH file: {error}") from error
     if motion.frames.shape[0] < MIN_FRAMES:

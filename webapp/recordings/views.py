@@ -23,6 +23,7 @@ from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import UploadForm
 from webapp.recordings.models import AnalysisRun
 from webapp.recordings.results import result_data
+from webapp.recordings.storage import DamagedRecordingError, read_verified
 from webapp.recordings.uploads import check_skeleton, store_recording, suggest_exercise
 
 
@@ -116,8 +117,11 @@ class ConfirmForm(forms.Form):
 
     def clean_exercise(self):
         exercise = self.cleaned_data["exercise"]
-        with self.recording.file.open("rb") as handle:
-            check_skeleton(read(handle.read()), exercise)
+        try:
+            content = read_verified(self.recording)
+        except DamagedRecordingError as error:
+            raise forms.ValidationError(str(error)) from error
+        check_skeleton(read(content), exercise)
         return exercise
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from drf_spectacular.types import OpenApiTypes
+from drf_spectacular.utils import OpenApiResponse, extend_schema
 from rest_framework.decorators import api_view
 from rest_framework.request import Request
 from rest_framework.response import Response
@@ -11,8 +13,13 @@ from webapp.reports import services
 from webapp.reports.views import pdf_response, period
 
 PENDING = {"status": "pending", "detail": "The report is being generated; try again shortly."}
+REPORT_RESPONSES = {
+    (200, "application/pdf"): OpenApiResponse(OpenApiTypes.BINARY, description="The PDF report."),
+    202: OpenApiResponse(OpenApiTypes.OBJECT, description="Being generated; ask again shortly."),
+}
 
 
+@extend_schema(responses=REPORT_RESPONSES)
 @api_view(["GET"])
 def recording_report(request: Request, pk):
     recording = get_recording_for_user(request, pk)
@@ -22,6 +29,7 @@ def recording_report(request: Request, pk):
     return pdf_response(name, f"recording-{recording.pk}.pdf")
 
 
+@extend_schema(responses=REPORT_RESPONSES)
 @api_view(["GET"])
 def progress_report(request: Request, pk):
     patient = get_patient_for_user(request, pk)

@@ -1,0 +1,254 @@
+"""Which of a clinic's patients need a therapist's attention, and why.
+
+Three signals, each one query over the clinic (never one query per patient):
+
+- a failed analysis: the newest run of a recent recording failed (the patient or the file may
+  need help before the next session);
+- falling scores: the newest score of an exercise is well below the mean of the (up to three)
+  scores before it; a window function picks the newest four runs per patient and exercise,
+  the comparison is made here;
+- missed sessions: fewer than half the sessions a prescription asks for were done over the last
+  two weeks (sessions counted as in `webapp.patients.adherence`: days with a recording).
+
+Archived and deleted patients are left out: nobody is treating them.
+
+Cost: scores live inside `AnalysisRun.summary` (JSON of 10–20 kB), so the falling-score query
+reads that column for the runs of the last TREND_WITHIN_DAYS days; it is the slowest part of the
+home page in a large clinic (see the report). A numeric score column would remove that read.
+"""
+
+from __future__ import annotations
+
+import datetime
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+from django.db.models import (
+    Count,
+    Exists,
+    F,
+    FloatField,
+    Max,
+    OuterRef,
+    Q,
+    QuerySet,
+    Window,
+)
+from django.db.models.fields.json import KT
+from django.db.models.functions import Cast, RowNumber, TruncDate
+from django.utils import timezone
+
+from webapp.patients.adherence import prescribed_sessions
+from webapp.patients.models import Prescription
+from webapp.recordings.models import AnalysisRun, Recording, RunStatus
+
+FAILED_WITHIN_DAYS = 14
+TREND_WITHIN_DAYS = 45  # scores older than this do not count toward a trend (nor get read)
+TREND_LATEST_WITHIN_DAYS = 30  # the falling score itself must be this recent
+TREND_EARLIER_RUNS = 3
+SCORE_DROP = 10.0  # points (scores are 0–100)
+ADHERENCE_WINDOW_DAYS = 14
+ADHERENCE_MIN_PERCENT = 50.0
+NEWEST_FIRST = (F("recording__uploaded_at").desc(), F("created_at").desc())
+ROWS_PER_SIGNAL = 500  # caps each query; a clinic with more flags has bigger problems
+
+
+@dataclass(frozen=True)
+class Reason:
+    kind: str  # "failed" | "falling" | "adherence"
+    text: str
+    urgency: float  # higher first
+    recording_id: Any = None  # the recording to open, when there is one
+
+
+@dataclass
+class Attention:
+    patient_id: Any
+    reasons: list[Reason] = field(default_factory=list)
+    patient: Any = None  # filled for the patients shown
+
+    @property
+    def urgency(self) -> float:
+        return max(r.urgency for r in self.reasons) + 0.01 * len(self.reasons)
+
+
+class Period(NamedTuple):
+    """What `prescribed_sessions` reads of a prescription, clipped to the adherence window."""
+
+    start_date: datetime.date
+    end_date: datetime.date | None
+    sessions_per_week: int
+
+
+def clinic_runs(clinic_id: Any) -> QuerySet[AnalysisRun]:
+    return AnalysisRun.objects.filter(
+        recording__clinic_id=clinic_id,
+        recording__patient__deleted_at__isnull=True,
+        recording__patient__archived_at__isnull=True,
+    )
+
+
+def failed_analyses(clinic_id: Any, now: datetime.datetime) -> list[tuple[Any, Reason]]:
+    newer = AnalysisRun.objects.filter(
+        recording_id=OuterRef("recording_id"), created_at__gt=OuterRef("created_at")
+    )
+    rows = (
+        clinic_runs(clinic_id)
+        .filter(status=RunStatus.FAILED, created_at__gte=now - _days(FAILED_WITHIN_DAYS))
+        .filter(~Exists(newer))
+        .order_by("-created_at")
+        .values("recording_id", "recording__patient_id", "recording__exercise__name")
+    )
+    found = []
+    for row in rows[:ROWS_PER_SIGNAL]:
+        exercise = row["recording__exercise__name"] or "a recording"
+        reason = Reason("failed", f"Analysis of {exercise} failed", 300.0, row["recording_id"])
+        found.append((row["recording__patient_id"], reason))
+    return found
+
+
+def recent_scores(clinic_id: Any, now: datetime.datetime) -> QuerySet[AnalysisRun]:
+    """The newest few scores per (patient, exercise), for pairs whose newest run is recent.
+
+    Rows come newest first within each pair (`position` 1 is the newest). The score is read
+    from the large `summary` JSON once per row, outside the window computations.
+    """
+    pair = [F("recording__patient_id"), F("recording__exercise_id")]
+    newer_success = AnalysisRun.objects.filter(
+        recording_id=OuterRef("recording_id"),
+        status=RunStatus.SUCCEEDED,
+        created_at__gt=OuterRef("created_at"),
+    )
+    return (
+        clinic_runs(clinic_id)
+        .filter(status=RunStatus.SUCCEEDED, recording__exercise__isnull=False)
+        .filter(recording__uploaded_at__gte=now - _days(TREND_WITHIN_DAYS))
+        .filter(~Exists(newer_success))  # a re-analysed recording counts once, by its newest run
+        .annotate(
+            position=Window(RowNumber(), partition_by=pair, order_by=NEWEST_FIRST),
+            newest_at=Window(Max("recording__uploaded_at"), partition_by=pair),
+            score=Cast(KT("summary__score"), FloatField()),
+        )
+        .filter(position__lte=TREND_EARLIER_RUNS + 1)
+        .filter(newest_at__gte=now - _days(TREND_LATEST_WITHIN_DAYS))
+        .values(
+            "recording_id",
+            "recording__patient_id",
+            "recording__exercise__name",
+            "position",
+            "score",
+        )
+        .order_by("recording__patient_id", "recording__exercise_id", "position")
+    )
+
+
+def falling_scores(clinic_id: Any, now: datetime.datetime) -> list[tuple[Any, Reason]]:
+    found: list[tuple[Any, Reason]] = []
+    newest: dict | None = None
+    earlier: list[float] = []
+    for row in recent_scores(clinic_id, now).iterator(chunk_size=5000):
+        if row["position"] == 1:
+            found += falling(newest, earlier)
+            newest, earlier = row, []
+        elif row["score"] is not None:
+            earlier.append(row["score"])
+    return (found + falling(newest, earlier))[:ROWS_PER_SIGNAL]
+
+
+def falling(newest: dict | None, earlier: list[float]) -> list[tuple[Any, Reason]]:
+    """The reason, when the newest score is SCORE_DROP below the mean of at least two before it."""
+    if newest is None or newest["score"] is None or len(earlier) < 2:
+        return []
+    mean = sum(earlier) / len(earlier)
+    drop = mean - newest["score"]
+    if drop < SCORE_DROP:
+        return []
+    text = (
+        f"{newest['recording__exercise__name']}: score {newest['score']:.0f}, "
+        f"down {drop:.0f} from {mean:.0f}"
+    )
+    reason = Reason("falling", text, 200.0 + drop, newest["recording_id"])
+    return [(newest["recording__patient_id"], reason)]
+
+
+def missed_sessions(clinic_id: Any, today: datetime.date) -> list[tuple[Any, Reason]]:
+    window_start = today - _days(ADHERENCE_WINDOW_DAYS - 1)
+    prescriptions = (
+        Prescription.objects.filter(
+            patient__clinic_id=clinic_id,
+            patient__archived_at__isnull=True,
+            patient__deleted_at__isnull=True,
+            start_date__lte=today,
+        )
+        .filter(Q(end_date__isnull=True) | Q(end_date__gte=window_start))
+        .values(
+            "patient_id",
+            "exercise_id",
+            "exercise__name",
+            "sessions_per_week",
+            "start_date",
+            "end_date",
+        )
+    )
+    done = session_days(clinic_id, window_start, today)
+    found = []
+    for row in prescriptions.iterator(chunk_size=2000):
+        period = Period(
+            max(row["start_date"], window_start), row["end_date"], row["sessions_per_week"]
+        )
+        expected = prescribed_sessions(period, today)
+        count = done.get((row["patient_id"], row["exercise_id"]), 0)
+        if expected < 2 or 100.0 * count / expected >= ADHERENCE_MIN_PERCENT:
+            continue
+        text = (
+            f"{row['exercise__name']}: {count} of {expected} prescribed sessions "
+            f"in the last {ADHERENCE_WINDOW_DAYS} days"
+        )
+        found.append((row["patient_id"], Reason("adherence", text, 200.0 * (1 - count / expected))))
+    return found
+
+
+def session_days(
+    clinic_id: Any, first: datetime.date, last: datetime.date, patient_id: Any = None
+) -> dict[tuple[Any, Any], int]:
+    """Days with at least one recording, per (patient, exercise), between two dates inclusive."""
+    recordings = Recording.objects.filter(
+        clinic_id=clinic_id,
+        exercise__isnull=False,
+        uploaded_at__gte=_start_of(first),
+        uploaded_at__lt=_start_of(last + _days(1)),
+    )
+    if patient_id is not None:
+        recordings = recordings.filter(patient_id=patient_id)
+    rows = (
+        recordings.values("patient_id", "exercise_id")
+        .annotate(days=Count(TruncDate("uploaded_at"), distinct=True))
+        .order_by()
+    )
+    return {(r["patient_id"], r["exercise_id"]): r["days"] for r in rows}
+
+
+def patients_needing_attention(
+    clinic_id: Any, now: datetime.datetime | None = None
+) -> list[Attention]:
+    """Patients with at least one reason, the most urgent first (three queries in all)."""
+    if clinic_id is None:
+        return []
+    now = now or timezone.now()
+    found = failed_analyses(clinic_id, now) + falling_scores(clinic_id, now)
+    found += missed_sessions(clinic_id, timezone.localdate(now))
+    by_patient: dict[Any, Attention] = {}
+    for patient_id, reason in found:
+        by_patient.setdefault(patient_id, Attention(patient_id)).reasons.append(reason)
+    for entry in by_patient.values():
+        entry.reasons.sort(key=lambda r: -r.urgency)
+    return sorted(by_patient.values(), key=lambda a: -a.urgency)
+
+
+def _days(count: int) -> datetime.timedelta:
+    return datetime.timedelta(days=count)
+
+
+def _start_of(day: datetime.date) -> datetime.datetime:
+    """Midnight of a local date, so that day ranges use the index on `uploaded_at`."""
+    return timezone.make_aware(datetime.datetime.combine(day, datetime.time.min))

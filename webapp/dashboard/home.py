@@ -1,0 +1,142 @@
+"""What the home page shows, read with a fixed number of queries whatever the clinic's size.
+
+Every list is limited (or paged in memory after one bounded query), and each recording's newest
+run is read with correlated subqueries instead of one query per row.
+"""
+
+from __future__ import annotations
+
+import datetime
+from typing import Any
+
+from django.core.paginator import Page, Paginator
+from django.db.models import FloatField, OuterRef, QuerySet, Subquery
+from django.db.models.fields.json import KT
+from django.db.models.functions import Cast
+from django.urls import reverse
+from django.utils import timezone
+
+from webapp.accounts.models import User
+from webapp.accounts.permissions import visible_patients, visible_recordings
+from webapp.dashboard.attention import ADHERENCE_WINDOW_DAYS, Attention, Period, session_days
+from webapp.dashboard.attention import patients_needing_attention as attention_of_clinic
+from webapp.patients.adherence import prescribed_sessions
+from webapp.patients.models import Patient, Prescription
+from webapp.recordings.models import AnalysisRun, Recording, RunStatus
+
+RECENT_RECORDINGS = 10
+ACTIVE_RUNS = 20
+MY_PATIENTS = 8
+ATTENTION_PER_PAGE = 10
+ACTIVE = (RunStatus.QUEUED, RunStatus.RUNNING)
+
+
+def with_newest_run(recordings: QuerySet[Recording]) -> QuerySet[Recording]:
+    """Annotate each recording with its newest run's status, stage, progress and score."""
+    newest = AnalysisRun.objects.filter(recording_id=OuterRef("pk")).order_by("-created_at")
+    score = Cast(KT("summary__score"), FloatField())
+    return recordings.annotate(
+        run_id=Subquery(newest.values("pk")[:1]),
+        run_status=Subquery(newest.values("status")[:1]),
+        run_stage=Subquery(newest.values("stage")[:1]),
+        run_progress=Subquery(newest.values("progress")[:1]),
+        run_score=Subquery(newest.annotate(score=score).values("score")[:1]),
+    )
+
+
+def recent_recordings(user: User, limit: int = RECENT_RECORDINGS) -> list[Recording]:
+    recordings = visible_recordings(user).select_related("patient", "exercise")
+    return list(with_newest_run(recordings).order_by("-uploaded_at")[:limit])
+
+
+def active_runs(user: User, limit: int = ACTIVE_RUNS) -> list[AnalysisRun]:
+    """Queued and running analyses, oldest first (the ones the queue will finish next)."""
+    runs = (
+        AnalysisRun.objects.filter(status__in=ACTIVE, recording__in=visible_recordings(user))
+        .select_related("recording__patient", "recording__exercise")
+        .defer("summary", "developer_error")
+        .order_by("created_at")
+    )
+    return list(runs[:limit])
+
+
+def attention_page(user: User, page_number: Any) -> Page:
+    """One page of the patients needing attention, with their names (two queries per page)."""
+    entries: list[Attention] = attention_of_clinic(user.clinic_id)
+    page = Paginator(entries, ATTENTION_PER_PAGE).get_page(page_number)
+    shown = {entry.patient_id: entry for entry in page.object_list}
+    for patient in Patient.objects.filter(pk__in=shown).only("pk", "display_name"):
+        shown[patient.pk].patient = patient
+    page.object_list = [entry for entry in page.object_list if entry.patient is not None]
+    return page
+
+
+def my_patients(user: User, limit: int = MY_PATIENTS) -> list[Patient]:
+    """The therapist's own patients, most recently active first (the clinic's when none)."""
+    patients = visible_patients(user).filter(archived_at__isnull=True)
+    mine = patients.filter(therapists=user)
+    chosen = mine if mine.exists() else patients
+    ordered = chosen.order_by("-last_activity_at", "display_name")
+    return list(ordered.only("pk", "display_name", "last_activity_at")[:limit])
+
+
+def patient_prescriptions(patient: Patient, today: datetime.date | None = None) -> list[dict]:
+    """The patient's current prescriptions with sessions done over the adherence window."""
+    today = today or timezone.localdate()
+    window_start = today - datetime.timedelta(days=ADHERENCE_WINDOW_DAYS - 1)
+    prescriptions = (
+        Prescription.objects.filter(patient=patient, start_date__lte=today)
+        .exclude(end_date__lt=today)
+        .select_related("exercise")
+        .order_by("exercise__name")
+    )
+    done = session_days(patient.clinic_id, window_start, today, patient_id=patient.pk)
+    rows = []
+    for prescription in prescriptions:
+        start = max(prescription.start_date, window_start)
+        period = Period(start, prescription.end_date, prescription.sessions_per_week)
+        rows.append(
+            {
+                "prescription": prescription,
+                "expected": prescribed_sessions(period, today),
+                "done": done.get((patient.pk, prescription.exercise_id), 0),
+            }
+        )
+    return rows
+
+
+def run_json(run: AnalysisRun) -> dict[str, Any]:
+    recording = run.recording
+    return {
+        "run": str(run.pk),
+        "recording": str(recording.pk),
+        "url": reverse("recordings:detail", args=[recording.pk]),
+        "patient": recording.patient.display_name,
+        "exercise": recording.exercise.name if recording.exercise_id else None,
+        "status": run.status,
+        "status_label": run.get_status_display(),
+        "stage": run.stage,
+        "progress": run.progress,
+    }
+
+
+def recording_json(recording: Recording) -> dict[str, Any]:
+    return {
+        "recording": str(recording.pk),
+        "url": reverse("recordings:detail", args=[recording.pk]),
+        "patient": recording.patient.display_name,
+        "exercise": recording.exercise.name if recording.exercise_id else None,
+        "uploaded_at": timezone.localtime(recording.uploaded_at).strftime("%-d %b %Y %H:%M"),
+        "status": recording.run_status,
+        "status_label": RunStatus(recording.run_status).label if recording.run_status else None,
+        "progress": recording.run_progress,
+        "score": None if recording.run_score is None else round(recording.run_score),
+    }
+
+
+def live_json(user: User) -> dict[str, Any]:
+    """What the page polls: the analyses under way and the recent recordings' states."""
+    return {
+        "active": [run_json(run) for run in active_runs(user)],
+        "recent": [recording_json(r) for r in recent_recordings(user)],
+    }
