@@ -19,7 +19,7 @@ from analysis.bvh import read
 from analysis.errors import AnalysisInputError
 from analysis.pipeline import analyse
 from webapp.patients.models import PerformanceLevel
-from webapp.recordings.models import AnalysisRun
+from webapp.recordings.models import AnalysisRun, summary_score
 from webapp.recordings.storage import read_verified
 from workers import exercise_models, runs
 
@@ -132,6 +132,7 @@ def store(run: AnalysisRun, token: str, summary: dict, arrays: dict, model_row) 
                 str(run.pk),
                 token,
                 summary=summary,
+                score=summary_score(summary),
                 arrays=stored,
                 model=model_row,
                 code_version=code_version,

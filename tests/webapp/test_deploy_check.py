@@ -24,6 +24,9 @@ SECURITY_VARIABLES = (
     "SECURE_HSTS_INCLUDE_SUBDOMAINS",
     "SECURE_HSTS_PRELOAD",
     "AXES_LOCKOUT_BY",
+    # The browser tests set this for their own process (Playwright's event loop); a real
+    # deployment never has it, and Django's deploy check rightly refuses it.
+    "DJANGO_ALLOW_ASYNC_UNSAFE",
 )
 
 

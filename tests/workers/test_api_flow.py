@@ -68,7 +68,8 @@ def test_upload_through_the_api_is_analysed_by_the_worker(worker):
     exercise = make_exercise(world.clinic, source=TUTOR)
     client = token_client("therapist")
     created = upload(client, world.patient, exercise)
-    assert created["status"] == "queued"
+    # A quick worker may already have claimed the run when the answer is serialised.
+    assert created["status"] in {"queued", "running"}
     body = wait_for_status(client, created["id"])
     assert body["status"] == "succeeded", (body, worker.log())
     assert body["progress"] == 100

@@ -12,9 +12,8 @@ Three signals, each one query over the clinic (never one query per patient):
 
 Archived and deleted patients are left out: nobody is treating them.
 
-Cost: scores live inside `AnalysisRun.summary` (JSON of 10–20 kB), so the falling-score query
-reads that column for the runs of the last TREND_WITHIN_DAYS days; it is the slowest part of the
-home page in a large clinic (see the report). A numeric score column would remove that read.
+Cost: the falling-score query reads the runs of the last TREND_WITHIN_DAYS days; it takes their
+numeric `score` column (a copy of the summary's score), never the 10–20 kB summaries.
 """
 
 from __future__ import annotations
@@ -27,15 +26,13 @@ from django.db.models import (
     Count,
     Exists,
     F,
-    FloatField,
     Max,
     OuterRef,
     Q,
     QuerySet,
     Window,
 )
-from django.db.models.fields.json import KT
-from django.db.models.functions import Cast, RowNumber, TruncDate
+from django.db.models.functions import RowNumber, TruncDate
 from django.utils import timezone
 
 from webapp.patients.adherence import prescribed_sessions
@@ -110,8 +107,7 @@ def failed_analyses(clinic_id: Any, now: datetime.datetime) -> list[tuple[Any, R
 def recent_scores(clinic_id: Any, now: datetime.datetime) -> QuerySet[AnalysisRun]:
     """The newest few scores per (patient, exercise), for pairs whose newest run is recent.
 
-    Rows come newest first within each pair (`position` 1 is the newest). The score is read
-    from the large `summary` JSON once per row, outside the window computations.
+    Rows come newest first within each pair (`position` 1 is the newest).
     """
     pair = [F("recording__patient_id"), F("recording__exercise_id")]
     newer_success = AnalysisRun.objects.filter(
@@ -127,7 +123,6 @@ def recent_scores(clinic_id: Any, now: datetime.datetime) -> QuerySet[AnalysisRu
         .annotate(
             position=Window(RowNumber(), partition_by=pair, order_by=NEWEST_FIRST),
             newest_at=Window(Max("recording__uploaded_at"), partition_by=pair),
-            score=Cast(KT("summary__score"), FloatField()),
         )
         .filter(position__lte=TREND_EARLIER_RUNS + 1)
         .filter(newest_at__gte=now - _days(TREND_LATEST_WITHIN_DAYS))

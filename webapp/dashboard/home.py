@@ -10,9 +10,7 @@ import datetime
 from typing import Any
 
 from django.core.paginator import Page, Paginator
-from django.db.models import FloatField, OuterRef, QuerySet, Subquery
-from django.db.models.fields.json import KT
-from django.db.models.functions import Cast
+from django.db.models import OuterRef, QuerySet, Subquery
 from django.urls import reverse
 from django.utils import timezone
 
@@ -34,13 +32,12 @@ ACTIVE = (RunStatus.QUEUED, RunStatus.RUNNING)
 def with_newest_run(recordings: QuerySet[Recording]) -> QuerySet[Recording]:
     """Annotate each recording with its newest run's status, stage, progress and score."""
     newest = AnalysisRun.objects.filter(recording_id=OuterRef("pk")).order_by("-created_at")
-    score = Cast(KT("summary__score"), FloatField())
     return recordings.annotate(
         run_id=Subquery(newest.values("pk")[:1]),
         run_status=Subquery(newest.values("status")[:1]),
         run_stage=Subquery(newest.values("stage")[:1]),
         run_progress=Subquery(newest.values("progress")[:1]),
-        run_score=Subquery(newest.annotate(score=score).values("score")[:1]),
+        run_score=Subquery(newest.values("score")[:1]),
     )
 
 

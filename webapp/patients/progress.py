@@ -28,13 +28,13 @@ class JsonArrayLength(Func):
 
 
 POINT_VALUES = {
-    "score": KeyTransform("score", "summary"),
     "repetition_count": JsonArrayLength(KeyTransform("repetitions", "summary")),
     "range_of_motion": KeyTransform("range_of_motion", "summary"),
     "gamma": KeyTransform("gamma", "summary"),
 }
 POINT_FIELDS = (
     "pk",
+    "score",  # the run's score column, a copy of summary["score"]
     "recording_id",
     "recording__exercise_id",
     "recording__exercise__name",

@@ -82,6 +82,27 @@ class RunStatus(models.TextChoices):
     FAILED = "failed", "Failed"
 
 
+def summary_score(summary: dict | None) -> float | None:
+    """The recording score (0–100) a run's summary holds, if any."""
+    score = (summary or {}).get("score")
+    return float(score) if isinstance(score, int | float) else None
+
+
+class AnalysisRunQuerySet(models.QuerySet):
+    """Keeps the `score` column equal to `summary["score"]` on bulk writes too."""
+
+    def update(self, **fields):
+        if "summary" in fields and "score" not in fields:
+            fields["score"] = summary_score(fields["summary"])
+        return super().update(**fields)
+
+    def bulk_create(self, objs, *args, **kwargs):
+        objs = list(objs)
+        for run in objs:
+            run.score = summary_score(run.summary)
+        return super().bulk_create(objs, *args, **kwargs)
+
+
 class AnalysisRun(models.Model):
     id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
     recording = models.ForeignKey(Recording, on_delete=models.CASCADE, related_name="runs")
@@ -108,7 +129,12 @@ class AnalysisRun(models.Model):
     user_error = models.TextField(blank=True)
     developer_error = models.TextField(blank=True)
     summary = models.JSONField(default=dict, blank=True)
+    # A copy of summary["score"]: queries over many runs (score trends on the dashboard) read
+    # this small column instead of every run's 10–20 kB summary.
+    score = models.FloatField(null=True, blank=True)
     arrays = models.FileField(upload_to="runs/%Y/%m/", blank=True)
+
+    objects = AnalysisRunQuerySet.as_manager()
 
     class Meta:
         ordering = ["-created_at"]
@@ -118,6 +144,13 @@ class AnalysisRun(models.Model):
             # failures): without it a large clinic scans every run.
             models.Index(fields=["status", "created_at"], name="run_status_created"),
         ]
+
+    def save(self, *args, **kwargs):
+        self.score = summary_score(self.summary)
+        fields = kwargs.get("update_fields")
+        if fields is not None and "summary" in fields:
+            kwargs["update_fields"] = {*fields, "score"}
+        super().save(*args, **kwargs)
 
 
 class LandmarkCorrection(models.Model):

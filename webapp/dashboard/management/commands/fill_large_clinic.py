@@ -328,6 +328,7 @@ class Filler:
             "finished_at": created + datetime.timedelta(seconds=3),
             "user_error": "" if succeeded else FAILURE,
             "summary": JsonText(f'{{"score": {upload.score}, {tail}') if succeeded else {},
+            "score": float(upload.score) if succeeded else None,
         }
 
     def level_rows(self) -> Iterator[dict]:
