@@ -95,7 +95,10 @@ def start_services(stack: ExitStack, args, env: dict[str, str]) -> None:
     gunicorn += ["--keep-alive", "10"]
     start(stack, "gunicorn", gunicorn, env)
     for index in (1, 2):
-        celery = [str(BIN / "celery"), "-A", "workers", "worker", "--concurrency", "1"]
+        # Analyses are batch work: at a lower CPU priority they use what the web leaves idle
+        # instead of making every page wait behind them (0 turns this off).
+        celery = ["nice", "-n", str(args.worker_nice)] if args.worker_nice else []
+        celery += [str(BIN / "celery"), "-A", "workers", "worker", "--concurrency", "1"]
         celery += ["-Q", env["CELERY_QUEUE"], "-n", f"load{index}@%h", "--loglevel", "WARNING"]
         start(stack, f"worker{index}", celery, env)
     wait_healthy(args.port)
@@ -166,6 +169,7 @@ def main() -> None:
     parser.add_argument("--therapists", type=int, default=50)
     parser.add_argument("--uploaders", type=int, default=20)
     parser.add_argument("--keep-db", action="store_true")
+    parser.add_argument("--worker-nice", type=int, default=10, help="CPU niceness of the workers")
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     shutil.rmtree(OUT / "data", ignore_errors=True)  # media of the previous run's database
