@@ -141,20 +141,31 @@ def _segment_timing(jumps: FloatArray, turn: float, limit: float) -> FloatArray:
     return fractions
 
 
+def _segments_to_retime(
+    jumps: FloatArray, f: IntArray, turns: FloatArray, limit: float
+) -> npt.NDArray[np.bool_]:
+    """(L − 1, J): whether uniform timing of a segment's turn would push one of its transitions
+    that the input kept within ``limit`` over it (one vectorised test for all segments)."""
+    lengths = np.diff(f)
+    segment = np.repeat(np.arange(len(lengths)), lengths)  # segment of each inner transition
+    inner = jumps[f[0] : f[-1]]
+    over = (inner <= limit) & (inner + turns[segment] / lengths[segment, None] > limit)
+    return np.logical_or.reduceat(over, f[:-1] - f[0], axis=0)
+
+
 def _timing(q: FloatArray, f: IntArray, scaled: FloatArray, limit: float | None) -> FloatArray:
     """Slerp fraction (F, J) of every frame between its bracketing landmarks' offsets."""
     _, _, w = _brackets(f, len(q))
     timing = np.repeat(w[:, None], q.shape[1], axis=1)
-    if limit is None:
+    if limit is None or len(f) < 2:
         return timing
     jumps = frame_jumps(q)  # (F − 1, J)
     turns = quat.angle_between(scaled[:-1], scaled[1:], degrees=True)  # (L − 1, J)
-    for k in range(len(f) - 1):
+    for k, j in np.argwhere(_segments_to_retime(jumps, f, turns, limit)):
         start, stop = int(f[k]), int(f[k + 1])
-        for j in range(q.shape[1]):
-            timing[start : stop + 1, j] = _segment_timing(
-                jumps[start:stop, j], float(turns[k, j]), limit
-            )
+        fractions = _segment_timing(jumps[start:stop, j], float(turns[k, j]), limit)
+        # The landmark frame `stop` starts the next bracket (fraction 0 there): leave it.
+        timing[start:stop, j] = fractions[:-1]
     return timing
 
 
