@@ -1,5 +1,5 @@
 """Command line: ``python -m analysis build-model …`` and ``python -m analysis analyse …``."""
 
-from analysis.cli import main
+from analysis.pipeline.cli import main
 
 raise SystemExit(main())

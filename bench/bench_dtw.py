@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analysis import dtw
 from analysis.dtw import DTWOptions
+from analysis.dtw import offline as dtw
 from analysis.online import OpenEndAligner
 
 with warnings.catch_warnings():

@@ -20,9 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from analysis.bvh import Motion, Skeleton, read
-from analysis.model import build_model
-from analysis.pipeline import analyse
-from analysis.resample import resample
+from analysis.kinematics import resample
+from analysis.pipeline import analyse, build_model
 
 EXTRA = ("LeftThumb", "LeftIndex", "LeftPinky", "RightThumb", "RightIndex", "RightPinky",
          "LeftHeel", "RightHeel", "Jaw")  # fmt: skip

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis import kinematics as kin
 from analysis.bvh import read
+from analysis.kinematics import forward_kinematics as kin
 from tests.analysis.test_kinematics import TOL, reference_of
 
 

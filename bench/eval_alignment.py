@@ -52,13 +52,13 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis import kinematics as kin
-from analysis import quaternions as quat
 from analysis.bvh import read
 from analysis.dtw import DTWOptions, align
-from analysis.joint_weights import JointWeightOptimizer
-from analysis.metrics import offline_mapping, segment_labels
-from analysis.online import ForwardPlotAligner, ForwardPlotOptions, OpenEndAligner
+from analysis.dtw.joint_weights import JointWeightOptimizer
+from analysis.dtw.metrics import offline_mapping, segment_labels
+from analysis.kinematics import forward_kinematics as kin
+from analysis.kinematics import quaternions as quat
+from analysis.online.aligners import ForwardPlotAligner, ForwardPlotOptions, OpenEndAligner
 
 EXERCISES = [f"m{k:02d}" for k in range(1, 11)]
 PATIENTS = ["s02", "s03", "s04", "s05", "s06", "s07"]

@@ -23,12 +23,10 @@ from pathlib import Path
 import numpy as np
 from sklearn.metrics import roc_auc_score
 
+from analysis.assessment.scoring import repetition_distance
 from analysis.bvh import Motion, read
-from analysis.model import build_model
-from analysis.model_fit import TrainingRecording
-from analysis.pipeline import analyse
-from analysis.posefeatures import flatten, scaled_positions
-from analysis.scoring import repetition_distance
+from analysis.kinematics import flatten, scaled_positions
+from analysis.pipeline import TrainingRecording, analyse, build_model
 
 SUBJECTS = [f"s{k:02d}" for k in range(2, 8)]
 LABELS = ("correct", "incorrect")

@@ -25,8 +25,8 @@ import numpy as np
 
 from analysis.bvh import read
 from analysis.kinematics import positions
-from analysis.retrieval import Metric, MotionRetriever, _fill_euclidean, _fill_lut
-from analysis.retrieval_features import recording_features
+from analysis.retrieval import recording_features
+from analysis.retrieval.quantised import Metric, MotionRetriever, _fill_euclidean, _fill_lut
 
 EXERCISES = {
     "m01": "deep squat",

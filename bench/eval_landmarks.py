@@ -36,18 +36,19 @@ import numpy as np
 from analysis.bvh import Motion, read
 from analysis.dtw import DTWOptions, align
 from analysis.kinematics import normalised_positions
-from analysis.landmark_eval import Confusion, compromise_intervals, confusion
-from analysis.landmarks import (
+from analysis.landmarks.detector import ClassifierName
+from analysis.landmarks.evaluation import Confusion, compromise_intervals, confusion
+from analysis.landmarks.identification import (
     FAITHFUL,
-    ClassifierName,
     LandmarkModel,
     LandmarkOptions,
     periodic_landmarks,
     tutor_cycle,
 )
-from analysis.refining import Candidates, Clustering, GrammarOptions, Selection, refine
-from analysis.repetitions import repetitions
-from analysis.signature import MotionSignature
+from analysis.landmarks.refining import Candidates, Clustering, Selection, refine
+from analysis.landmarks.regularise import GrammarOptions
+from analysis.landmarks.repetitions import repetitions
+from analysis.landmarks.signature import MotionSignature
 
 EXERCISES = tuple(f"m{i:02d}" for i in range(1, 11))
 SUBJECTS = tuple(f"s{i:02d}" for i in range(1, 8))

@@ -19,8 +19,8 @@ import time
 from collections.abc import Callable
 from dataclasses import replace
 
-from analysis.periodic import PAPER_GA, PAPER_GA_K, TUNED_GA_K, clean
-from analysis.periodic_bench import (
+from analysis.periodic.sequence import PAPER_GA, PAPER_GA_K, TUNED_GA_K, clean
+from analysis.periodic.synthetic import (
     PeriodicSample,
     PeriodicScores,
     RandomPeriodicOptions,

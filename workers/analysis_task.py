@@ -15,8 +15,7 @@ from django.core.files.base import ContentFile
 from django.db import InterfaceError, OperationalError, transaction
 
 from analysis import __version__ as code_version
-from analysis.bvh import read
-from analysis.errors import AnalysisInputError
+from analysis.bvh import AnalysisInputError, read
 from analysis.pipeline import analyse
 from webapp.patients.models import PerformanceLevel
 from webapp.recordings.models import AnalysisRun, summary_score

@@ -16,8 +16,8 @@ from django.db.models import Q
 from django.utils import timezone
 
 from analysis.bvh import read
-from analysis.gbdtw import BayesThreshold
-from analysis.model_fit import TrainingRecording
+from analysis.online import BayesThreshold
+from analysis.pipeline import TrainingRecording
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from webapp.recordings.models import (
     AnalysisRun,

@@ -6,8 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis import quaternions as quat
-from analysis.adjustment import (
+from analysis.adjustment.affine import (
     Performance,
     adjust,
     channel_orders,
@@ -18,8 +17,9 @@ from analysis.adjustment import (
 )
 from analysis.assessment import tutor_mean_poses
 from analysis.bvh import read
+from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.kinematics import forward, rotations
-from analysis.synthetic import SyntheticConfig, generate
+from analysis.kinematics import quaternions as quat
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 JUMP = 20.0  # degrees between consecutive frames

@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 from sklearn.tree import DecisionTreeClassifier
 
-from analysis import quaternions as quat
-from analysis.assessment import (
+from analysis.assessment.joints import (
     LandmarkAssessor,
     ThresholdAssessor,
     joint_relevance,
@@ -14,8 +13,9 @@ from analysis.assessment import (
     pose_difference_features,
     tutor_mean_poses,
 )
+from analysis.bvh.synthetic import SyntheticConfig, generate
+from analysis.kinematics import quaternions as quat
 from analysis.kinematics import rotations
-from analysis.synthetic import SyntheticConfig, generate
 
 
 def test_mean_of_symmetric_rotations_is_their_centre_whatever_the_signs():

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from analysis.bvh import BVHError, Motion, Skeleton, dumps, read, write
-from analysis.kinematics import end_site_positions, positions
+from analysis.kinematics.forward_kinematics import end_site_positions, positions
 from tests.analysis import bvh_cases as bc
 
 REPS = Path("data/ui-prmd/reps")

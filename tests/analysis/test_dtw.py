@@ -10,9 +10,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analysis import dtw, dtw_reference
-from analysis.dtw import Alignment, DTWOptions, align, band_limits, distance
-from analysis.frame_costs import cost_matrix, frame_cost
+from analysis.dtw import offline as dtw
+from analysis.dtw import reference as dtw_reference
+from analysis.dtw.frame_costs import cost_matrix, frame_cost
+from analysis.dtw.offline import Alignment, DTWOptions, align, band_limits, distance
 
 KINDS = ("euclidean", "sqeuclidean", "quaternion", "geodesic")
 
@@ -307,7 +308,7 @@ def test_matrix_product_costs_equal_reference(kind: str) -> None:
 def test_blas_limit_is_counted_and_restored() -> None:
     from threadpoolctl import threadpool_info
 
-    from analysis.cost_blas import single_threaded_blas
+    from analysis.dtw.cost_blas import single_threaded_blas
 
     def blas_threads() -> list[int]:
         return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]

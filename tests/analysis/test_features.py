@@ -4,7 +4,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analysis.features import extrema, feature_names, frame_features, nearest_extrema
+from analysis.landmarks.features import extrema, feature_names, frame_features, nearest_extrema
 
 # frames:            0  1  2  3  4  5  6
 SERIES = np.array([0.0, 1, 3, 2, 2, 5, 4])

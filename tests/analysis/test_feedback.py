@@ -37,7 +37,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from analysis.bvh import read
-from analysis.feedback import (
+from analysis.feedback.grammar import (
+    And,
+    Condition,
+    JointLevel,
+    LandmarkType,
+    Not,
+    Or,
+    format_condition,
+)
+from analysis.feedback.sentences import (
     Comment,
     FeedbackOptions,
     Grammar,
@@ -46,15 +55,6 @@ from analysis.feedback import (
     default_grammar,
     joint_label,
     matches,
-)
-from analysis.feedback_grammar import (
-    And,
-    Condition,
-    JointLevel,
-    LandmarkType,
-    Not,
-    Or,
-    format_condition,
 )
 
 GRAMMARS = Path(__file__).parent / "fixtures" / "grammars"

@@ -7,7 +7,7 @@ import pytest
 from scipy import stats
 
 from analysis.dtw import DTWOptions
-from analysis.gbdtw import (
+from analysis.online.gbdtw import (
     BayesThreshold,
     GBDTWOptions,
     cross_correlation_shift,

@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.dtw import DTWOptions, align
-from analysis.frame_costs import cost_matrix
-from analysis.joint_weights import JointWeightOptimizer, aligned_pairs, alignment_error
+from analysis.dtw import DTWOptions, align, cost_matrix
+from analysis.dtw.joint_weights import JointWeightOptimizer, aligned_pairs, alignment_error
 from analysis.online import OpenEndAligner
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from analysis.bvh import read
-from analysis.key_pose_suggestions import suggest_key_poses
+from analysis.landmarks import suggest_key_poses
 
 UI_PRMD = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 

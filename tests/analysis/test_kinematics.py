@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from analysis import kinematics as kin
 from analysis.bvh import Motion, read
+from analysis.kinematics import forward_kinematics as kin
 from tests.analysis import bvh_cases as bc
 
 UI_PRMD = sorted(Path("data/ui-prmd").glob("*/*.bvh.gz"))

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from analysis.landmark_eval import (
+from analysis.landmarks.evaluation import (
     Confusion,
     compromise_intervals,
     confusion,

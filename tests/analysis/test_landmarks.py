@@ -6,24 +6,26 @@ from sklearn.dummy import DummyClassifier
 from sklearn.ensemble import AdaBoostClassifier
 from sklearn.tree import DecisionTreeClassifier
 
-from analysis.landmark_eval import evaluate
-from analysis.landmarks import (
-    FAITHFUL,
+from analysis.bvh.synthetic import SyntheticConfig, generate
+from analysis.landmarks.detector import (
     Boosted,
     LandmarkDetector,
-    LandmarkModel,
-    LandmarkOptions,
     frame_types,
-    landmark_repetitions,
     make_classifier,
-    periodic_landmarks,
     training_frames,
     training_observations,
+)
+from analysis.landmarks.evaluation import evaluate
+from analysis.landmarks.identification import (
+    FAITHFUL,
+    LandmarkModel,
+    LandmarkOptions,
+    landmark_repetitions,
+    periodic_landmarks,
     tutor_cycle,
 )
-from analysis.refining import Candidates
-from analysis.signature import pose_series
-from analysis.synthetic import SyntheticConfig, generate
+from analysis.landmarks.refining import Candidates
+from analysis.landmarks.signature import pose_series
 
 
 def test_training_frames_eq_5_11_landmarks_plus_three_times_as_many_others():

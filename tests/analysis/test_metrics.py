@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis import quaternions as quat
 from analysis.dtw import align
-from analysis.metrics import (
+from analysis.dtw.metrics import (
     displacement_vectors,
     kendall_tau_score,
     mapping_deviation,
@@ -17,6 +16,7 @@ from analysis.metrics import (
     segment_agreement,
     segment_labels,
 )
+from analysis.kinematics import quaternions as quat
 
 
 def swinging_joints(n: int, phase: float = 0.0) -> np.ndarray:

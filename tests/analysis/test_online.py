@@ -8,10 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from analysis import quaternions as quat
-from analysis.dtw import DTWOptions, align
-from analysis.frame_costs import cost_matrix
-from analysis.online import (
+from analysis.dtw import DTWOptions, align, cost_matrix
+from analysis.kinematics import quaternions as quat
+from analysis.online.aligners import (
     ForwardPlotAligner,
     ForwardPlotOptions,
     OpenEndAligner,

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analysis.performance_level import session_value, update_levels
+from analysis.assessment.performance_level import session_value, update_levels
 
 levels_lists = st.lists(st.integers(1, 4), min_size=1, max_size=12)
 

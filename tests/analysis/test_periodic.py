@@ -8,20 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from analysis.periodic import PAPER_GA, PAPER_GA_K, TUNED_GA_K, clean, naive_psa
-from analysis.periodic_align import needleman_wunsch, nw_star, smith_waterman
-from analysis.periodic_bench import (
-    Confusion,
-    PeriodicSample,
-    RandomPeriodicOptions,
-    confusion,
-    corrupt,
-    experiment,
-    random_training_sequence,
-    scores,
-)
-from analysis.periodic_cost import candidate_cost, member_scores, new_cache, population_cost
-from analysis.periodic_fitness import (
+from analysis.periodic.baselines import needleman_wunsch, nw_star, smith_waterman
+from analysis.periodic.cost import candidate_cost, member_scores, new_cache, population_cost
+from analysis.periodic.fitness import (
     INVERSION_RULES,
     chromosome_fitness,
     close_pattern,
@@ -40,13 +29,24 @@ from analysis.periodic_fitness import (
     tables,
     training_patterns,
 )
-from analysis.periodic_ga import (
+from analysis.periodic.ga import (
     GAOptions,
     Problem,
     prior_descent,
     run_ga,
     single_point_crossover,
     tournament_selection,
+)
+from analysis.periodic.sequence import PAPER_GA, PAPER_GA_K, TUNED_GA_K, clean, naive_psa
+from analysis.periodic.synthetic import (
+    Confusion,
+    PeriodicSample,
+    RandomPeriodicOptions,
+    confusion,
+    corrupt,
+    experiment,
+    random_training_sequence,
+    scores,
 )
 
 S_618 = list("ABABABACDCDCDC")  # eq 6.18

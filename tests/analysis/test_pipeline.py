@@ -10,11 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.bvh import read
-from analysis.errors import ModelVersionError, RecordingTooShortError, SkeletonMismatchError
-from analysis.model import build_model, dump_model, load_model
-from analysis.pipeline import analyse
-from analysis.synthetic import SyntheticConfig, generate
+from analysis.bvh import RecordingTooShortError, SkeletonMismatchError, read
+from analysis.bvh.synthetic import SyntheticConfig, generate
+from analysis.pipeline import ModelVersionError, analyse, build_model, dump_model, load_model
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 FIELDS = {"frames", "fps", "landmarks", "repetitions", "score", "assessment", "feedback",

@@ -3,22 +3,24 @@
 import numpy as np
 import pytest
 
-from analysis.refining import (
+from analysis.landmarks.refining import (
     Candidates,
-    GrammarOptions,
     RefineOptions,
     cluster,
     em_clusters,
-    farthest_frame,
-    farthest_types,
     gap_clusters,
     mean_poses,
     refine,
+    select,
+    temporal_clusters,
+)
+from analysis.landmarks.regularise import (
+    GrammarOptions,
+    farthest_frame,
+    farthest_types,
     regularise,
     relocate,
-    select,
     tempo_costs,
-    temporal_clusters,
     transitions,
     typical_gaps,
 )

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from analysis.landmarks.repetitions import Repetition, repetitions
 from analysis.periodic import clean
-from analysis.repetitions import Repetition, repetitions
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 SIDES = [[1, 2], [3, 4]]  # left (start, end of range), right (start, end of range)

@@ -4,10 +4,10 @@ rotations along the shortest arc."""
 import numpy as np
 import pytest
 
-from analysis import quaternions as quat
+from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.kinematics import positions, rotations
-from analysis.resample import resample, sample_times
-from analysis.synthetic import SyntheticConfig, generate
+from analysis.kinematics import quaternions as quat
+from analysis.kinematics.resample import resample, sample_times
 
 
 @pytest.fixture(scope="module")

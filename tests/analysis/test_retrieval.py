@@ -7,8 +7,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analysis.errors import SkeletonMismatchError
-from analysis.retrieval import (
+from analysis.bvh import SkeletonMismatchError
+from analysis.retrieval.features import (
+    FEATURES,
+    N_FEATURES,
+    frame_features,
+    map_joints,
+    recording_features,
+    resample_frames,
+)
+from analysis.retrieval.quantised import (
     MotionRetriever,
     code_distance,
     dtw_features,
@@ -18,14 +26,6 @@ from analysis.retrieval import (
     pack,
     quantise,
     unpack,
-)
-from analysis.retrieval_features import (
-    FEATURES,
-    N_FEATURES,
-    frame_features,
-    map_joints,
-    recording_features,
-    resample_frames,
 )
 
 NAMES = (

@@ -8,10 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
+from analysis.assessment.scoring import fit_scorer, joint_reach, repetition_features
 from analysis.bvh import read
-from analysis.model import build_model
-from analysis.pipeline import analyse
-from analysis.scoring import fit_scorer, joint_reach, repetition_features
+from analysis.pipeline import analyse, build_model
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 

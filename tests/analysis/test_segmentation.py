@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from analysis.segmentation import fit_axis, middle_of_rest, segment
+from analysis.landmarks.segmentation import fit_axis, middle_of_rest, segment
 
 REP = 60  # frames of one tutor repetition, rest included
 FloatArray = npt.NDArray[np.float64]

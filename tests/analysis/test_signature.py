@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from analysis.signature import (
+from analysis.bvh.synthetic import SyntheticConfig, generate
+from analysis.landmarks.signature import (
     MotionSignature,
     SignatureOptions,
     augmented_copies,
@@ -15,7 +16,6 @@ from analysis.signature import (
     pose_series,
     smooth,
 )
-from analysis.synthetic import SyntheticConfig, generate
 
 
 @pytest.fixture(scope="module")

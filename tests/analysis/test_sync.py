@@ -5,13 +5,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analysis import quaternions as quat
-from analysis.sync import (
+from analysis.adjustment.sync import (
     sample_linear,
     sample_rotations,
     synchronise_landmarks,
     tutor_frame_map,
 )
+from analysis.kinematics import quaternions as quat
 
 
 def test_identical_sequences_pair_one_to_one():

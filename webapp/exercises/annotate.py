@@ -18,10 +18,9 @@ from django.shortcuts import render
 from django.views.decorators.http import require_POST
 
 from analysis.bvh import read
-from analysis.feedback import Grammar
-from analysis.feedback_grammar import GrammarError
-from analysis.key_pose_suggestions import suggest_key_poses
+from analysis.feedback import Grammar, GrammarError
 from analysis.kinematics import rotations
+from analysis.landmarks import suggest_key_poses
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
 from webapp.exercises.forms import LandmarksForm
 from webapp.exercises.models import Exercise

@@ -19,8 +19,7 @@ from django.core.cache import cache
 
 from analysis.bvh import Motion, read
 from analysis.kinematics import positions
-from analysis.retrieval import MotionRetriever
-from analysis.retrieval_features import recording_features
+from analysis.retrieval import MotionRetriever, recording_features
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
 from webapp.recordings.models import Recording

@@ -14,7 +14,7 @@ import logging
 
 from django.utils import timezone
 
-from analysis.errors import AnalysisInputError
+from analysis.bvh import AnalysisInputError
 from webapp.recordings.models import Recording
 
 log = logging.getLogger(__name__)

@@ -19,8 +19,7 @@ from django.db import transaction
 from django.db.models import Q
 from django.utils import timezone
 
-from analysis.bvh import BVHError, Motion, read
-from analysis.errors import AnalysisInputError
+from analysis.bvh import AnalysisInputError, BVHError, Motion, read
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient

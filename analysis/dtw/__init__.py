@@ -1,0 +1,31 @@
+"""Offline time warping: options, compiled kernels, the readable reference, frame costs with joint
+weights, CMA-ES joint weights, and the alignment and similarity metrics.
+
+Pipeline: repetition scoring aligns each repetition with the tutor's through `align`.
+"""
+
+from analysis.dtw.frame_costs import (
+    CostInputs,
+    as_frames,
+    cost_matrix,
+    cost_rows,
+    is_quaternion_kind,
+    paired_costs,
+    path_groups,
+    speed_insensitive_cost,
+)
+from analysis.dtw.offline import Alignment, DTWOptions, align
+
+__all__ = [
+    "Alignment",
+    "CostInputs",
+    "DTWOptions",
+    "align",
+    "as_frames",
+    "cost_matrix",
+    "cost_rows",
+    "is_quaternion_kind",
+    "paired_costs",
+    "path_groups",
+    "speed_insensitive_cost",
+]

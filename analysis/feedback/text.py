@@ -1,0 +1,218 @@
+"""Words for the feedback of thesis 004 (§7.2.4, §7.4.2): sentences, joint names, default grammars.
+
+The thesis's generated feedback (Figures 7.8, 7.9, D.2–D.4) strings the matched feedback texts of
+one landmark into sentences with varied connectives, then adds the tips not said before::
+
+    "On this occasion, your left knee needs to be bent a little bit more. And your right knee needs
+     to be bent a little bit more. Try ducking lower."
+    "This time, once more, your left knee needs to be bent a little bit more. Again, your right knee
+     needs to be bent a little bit more."
+
+* the first sentence opens with "On this occasion," / "This time," / "Now,";
+* a feedback already said earlier in the session gets "again" / "once more";
+* the other new feedbacks and the second and later tips get "Furthermore," / "In addition," /
+  "Additionally," / "And".
+
+The thesis picks the words at random; we pick them with a seeded generator that avoids repeating the
+previous choice of the same kind, so a session reads varied and is reproducible.
+"""
+
+from __future__ import annotations
+
+import random
+import re
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+from analysis.feedback.grammar import (
+    And,
+    Condition,
+    JointLevel,
+    LandmarkType,
+    Or,
+    Rule,
+    format_rule,
+)
+
+# kind of phrase ("opener", "repeat", "addition") and the words allowed -> the words chosen
+Chooser = Callable[[str, Sequence[str]], str]
+
+
+@dataclass(frozen=True)
+class FeedbackOptions:
+    """Connectives of the sentences (each with its punctuation) and the seed that picks them."""
+
+    seed: int = 0
+    openers: tuple[str, ...] = ("On this occasion,", "This time,", "Now,")
+    repeats: tuple[str, ...] = ("Again,", "Once more,")
+    additions: tuple[str, ...] = ("Furthermore,", "In addition,", "Additionally,", "And")
+
+    def __post_init__(self) -> None:
+        if not (self.openers and self.repeats and self.additions):
+            raise ValueError("openers, repeats and additions each need at least one phrase")
+
+
+class VariedChooser:
+    """Seeded random choice of connectives that avoids the obvious repetitions.
+
+    Within one comment a kind never gets the same phrase twice in a row ("Again, … Again, …"), and
+    consecutive comments open differently. Memory of the other kinds is dropped when a comment
+    opens, otherwise a kind with two phrases would alternate in lockstep over the whole session.
+    """
+
+    def __init__(self, seed: int) -> None:
+        self._random = random.Random(seed)
+        self._last: dict[str, str] = {}
+
+    def __call__(self, kind: str, phrases: Sequence[str]) -> str:
+        if kind == "opener":
+            self._last = {kind: self._last[kind]} if kind in self._last else {}
+        fresh = [p for p in phrases if p != self._last.get(kind)] or list(phrases)
+        choice = self._random.choice(fresh)
+        self._last[kind] = choice
+        return choice
+
+
+def lower_first(text: str) -> str:
+    """'Your left arm …' -> 'your left arm …' to follow a connective; keeps 'I' and acronyms."""
+    word = text.split(" ", 1)[0]
+    if not word or word == "I" or (len(word) > 1 and word.isupper()):
+        return text
+    return text[0].lower() + text[1:]
+
+
+def _sentence(*parts: str) -> str:
+    text = " ".join(p for p in parts if p)
+    return text if text.endswith((".", "!", "?")) else text + "."
+
+
+def compose_feedback(
+    feedbacks: Sequence[str], repeated: Sequence[bool], options: FeedbackOptions, choose: Chooser
+) -> str:
+    """Sentences for one landmark's feedback texts, in grammar order.
+
+    ``repeated[i]`` says whether ``feedbacks[i]`` was already said earlier in the session.
+    """
+    sentences = []
+    for index, (text, again) in enumerate(zip(feedbacks, repeated, strict=True)):
+        if index == 0:
+            opener = choose("opener", options.openers)
+            repeat = lower_first(choose("repeat", options.repeats)) if again else ""
+            sentences.append(_sentence(opener, repeat, lower_first(text)))
+        else:
+            kind, phrases = (
+                ("repeat", options.repeats) if again else ("addition", options.additions)
+            )
+            sentences.append(_sentence(choose(kind, phrases), lower_first(text)))
+    return " ".join(sentences)
+
+
+def compose_tips(tips: Sequence[str], options: FeedbackOptions, choose: Chooser) -> str:
+    """Sentences for the new tips of one landmark: the first as written, the next ones joined."""
+    sentences = [_sentence(tips[0])] if tips else []
+    sentences += [
+        _sentence(choose("addition", options.additions), lower_first(t)) for t in tips[1:]
+    ]
+    return " ".join(sentences)
+
+
+# Joint names -----------------------------------------------------------------------------------
+
+_WORD = re.compile(r"[A-Z]+(?=[A-Z][a-z])|[A-Z]?[a-z]+|[A-Z]+|[0-9]+")
+_SIDES = {"left": "left", "l": "left", "right": "right", "r": "right"}
+# Skeleton vocabularies (UI-PRMD, CMU, Mixamo) name bones in ways a patient would not say.
+_PLAIN_WORDS = {
+    "up leg": "thigh",
+    "upper leg": "thigh",
+    "fore arm": "forearm",
+    "collar": "collarbone",
+    "toe base": "toes",
+    "head tip": "top of the head",
+    "head end": "top of the head",
+}
+_PLAIN = re.compile(r"\b(" + "|".join(map(re.escape, _PLAIN_WORDS)) + r")\b")
+
+
+def joint_label(name: str) -> str:
+    """Human-readable joint name: 'LeftKnee', 'KneeLeft', 'LEFT_KNEE', 'l_knee' -> 'left knee'.
+
+    Namespaces ('mixamorig:LeftArm') are dropped and bone words made plain ('LeftUpperLeg' ->
+    'left thigh', 'LeftCollar' -> 'left collarbone'). Also the key under which grammar joints
+    and assessed joints are matched, so 'LEFT_KNEE' in a grammar matches 'LeftKnee' in a skeleton.
+    """
+    words = [w.lower() for w in _WORD.findall(re.split(r"[:|]", name)[-1])]
+    side = ""
+    if len(words) > 1 and words[0] in _SIDES:
+        side = _SIDES[words.pop(0)]
+    elif len(words) > 1 and words[-1] in _SIDES:
+        side = _SIDES[words.pop()]
+    body = _PLAIN.sub(lambda m: _PLAIN_WORDS[m.group(1)], " ".join(words))
+    if not body:
+        return name.strip().lower()
+    return f"{side} {body}" if side else body
+
+
+# Default grammar -----------------------------------------------------------------------------
+
+_LEVEL_WORDS = {2: "slightly differently", 3: "noticeably differently", 4: "very differently"}
+_GRAMMAR_JOINT = re.compile(r"[^A-Za-z0-9_.:]")
+
+
+def _moment(type_name: str, number: int) -> str:
+    name = lower_first(type_name.strip())
+    if not name:
+        return f"at key pose {number}"
+    return f"at {name}" if name.startswith("the ") else f"at the {name}"
+
+
+def _grammar_joint(name: str) -> str:
+    """A joint name the grammar can hold that still matches ``name`` (see :func:`joint_label`)."""
+    written = _GRAMMAR_JOINT.sub("_", name)
+    if not written[:1].isalpha() and written[:1] != "_":
+        written = "_" + written
+    if joint_label(written) != joint_label(name):
+        raise ValueError(f"joint name {name!r} cannot be written in a grammar")
+    return written
+
+
+def _joint_rules(joint: str, number: int, moment: str, levels: Sequence[int]) -> list[Rule]:
+    label, written = joint_label(joint), _grammar_joint(joint)
+    rules = []
+    for level in levels:
+        how = _LEVEL_WORDS.get(level, "differently")
+        feedback = f"{moment}, your {label} moved {how} from the demonstration"
+        condition = And(LandmarkType(number), JointLevel(written, level))
+        rules.append(Rule(condition, feedback=feedback[0].upper() + feedback[1:]))
+    anyone: Condition = JointLevel(written, levels[0])
+    for level in levels[1:]:
+        anyone = Or(anyone, JointLevel(written, level))
+    tip = f"Look at the instructor's {label} {moment} and try to match it"
+    rules.append(Rule(And(LandmarkType(number), anyone), tip=tip))
+    return rules
+
+
+def default_grammar(
+    joints: Sequence[str],
+    landmark_types: Mapping[int, str] | Sequence[str],
+    levels: Iterable[int] = (3, 4),
+) -> str:
+    """Grammar text with, per landmark type and joint, a feedback for each of ``levels`` and a tip.
+
+    ``joints`` are skeleton (BVH) joint names; ``landmark_types`` maps type numbers to names
+    ("end of range"), or lists the names of types 1, 2, …. Levels 1 (as the tutor) and 2 say nothing
+    by default. Example line::
+
+        type$2 & @LeftLowerLeg$3 -> F:"At the end of range, your left lower leg moved noticeably
+        differently from the demonstration"
+    """
+    if not isinstance(landmark_types, Mapping):
+        landmark_types = {n: name for n, name in enumerate(landmark_types, start=1)}
+    chosen = sorted(set(levels))
+    if not chosen or not joints:
+        raise ValueError("a default grammar needs at least one joint and one level")
+    lines = ["# Default feedback grammar: edit the sentences and tips freely."]
+    for number, name in sorted(landmark_types.items()):
+        moment = _moment(name, number)
+        for joint in joints:
+            lines += ["", *(format_rule(r) for r in _joint_rules(joint, number, moment, chosen))]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,67 @@
+"""Key poses suggested on a tutor recording before any are annotated (annotation page).
+
+A therapist annotating a new tutor wants a starting point, not a blank timeline. Without a trained
+landmark model the one thing every exercise shares is its shape: the body leaves a rest pose,
+reaches the exercise's extreme pose and comes back. So the suggestion follows the whole-body
+distance from the first frame's pose: its prominent maxima are extreme poses (type 2), the lowest
+frame between two extremes and the stretches before the first and after the last are rest poses
+(type 1). The therapist then moves, retypes or deletes them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import pairwise
+
+import numpy as np
+import numpy.typing as npt
+from scipy.signal import find_peaks
+
+from analysis.bvh import Motion
+from analysis.landmarks.signature import pose_series
+
+REST_TYPE = 1
+EXTREME_TYPE = 2
+
+
+@dataclass(frozen=True)
+class KeyPoseSuggestion:
+    frames: tuple[int, ...]
+    types: tuple[int, ...]
+
+
+def distance_from_start(motion: Motion) -> npt.NDArray[np.float64]:
+    """(F,) mean joint distance (cm) of each frame's normalised pose from the first frame's."""
+    poses = pose_series(motion)
+    return np.asarray(np.linalg.norm(poses - poses[0], axis=2).mean(axis=1), dtype=np.float64)
+
+
+def extreme_frames(distance: npt.NDArray[np.float64], fps: float, prominence: float) -> np.ndarray:
+    """Frames of the prominent maxima of ``distance``, at least 0.3 s apart."""
+    span = float(distance.max() - distance.min())
+    if span <= 1e-9:
+        return np.zeros(0, dtype=np.int64)
+    peaks, _ = find_peaks(distance, prominence=prominence * span, distance=max(1, round(0.3 * fps)))
+    return peaks.astype(np.int64)
+
+
+def rest_frames(distance: npt.NDArray[np.float64], extremes: np.ndarray) -> list[int]:
+    """The lowest frame before the first extreme, between each pair, and after the last."""
+    edges = [0, *extremes.tolist(), distance.shape[0] - 1]
+    return [start + int(np.argmin(distance[start : stop + 1])) for start, stop in pairwise(edges)]
+
+
+def suggest_key_poses(motion: Motion, prominence: float = 0.3) -> KeyPoseSuggestion:
+    """Suggested key-pose frames and types (1 rest, 2 extreme) in time order.
+
+    ``prominence`` is the share of the distance curve's range a maximum must stand out by to
+    count as an extreme pose; 0.3 keeps tremor and pauses from adding poses.
+    """
+    distance = distance_from_start(motion)
+    extremes = extreme_frames(distance, motion.fps, prominence)
+    if extremes.size == 0:
+        return KeyPoseSuggestion(frames=(), types=())
+    marked = {frame: REST_TYPE for frame in rest_frames(distance, extremes)}
+    marked.update({int(frame): EXTREME_TYPE for frame in extremes})
+    frames = sorted(marked)
+    return KeyPoseSuggestion(frames=tuple(frames), types=tuple(marked[f] for f in frames))

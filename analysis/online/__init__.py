@@ -1,0 +1,10 @@
+"""Streaming alignment, one frame at a time: Open-End DTW and its weighted, path-length-weighted
+variant, and gesture-based DTW with its Bayes pass threshold.
+
+Pipeline: the exercise model's pass threshold is fitted with `BayesThreshold` when training.
+"""
+
+from analysis.online.aligners import OpenEndAligner
+from analysis.online.gbdtw import BayesThreshold
+
+__all__ = ["BayesThreshold", "OpenEndAligner"]

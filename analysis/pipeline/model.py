@@ -1,0 +1,152 @@
+"""The exercise model: everything the pipeline needs about one exercise, fitted once from its tutor.
+
+`build_model` takes the tutor recording with its key poses (landmark frames and types) and,
+optionally, therapist-labelled training recordings. It fits the movement features (which joints
+move, the progress axis used to find repetitions, the tutor's repetition templates), the score
+scale, the tutor's mean pose per landmark type, the assessment thresholds and the default
+feedback grammar. `dump_model` / `load_model` store it as one versioned file; loading refuses a
+file written by an incompatible format.
+"""
+
+from __future__ import annotations
+
+import io
+import pickle
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import IO, Any
+
+import numpy as np
+import numpy.typing as npt
+
+from analysis import __version__ as code_version
+from analysis.bvh import Motion
+from analysis.feedback import Grammar, default_grammar
+from analysis.pipeline.model_fit import ModelComponents, TrainingRecording, fit_components
+
+FORMAT_VERSION = 1
+MAGIC = b"PHYSIO-MODEL\n"
+FloatArray = npt.NDArray[np.float64]
+Progress = Callable[[str, float], None]
+
+# Models saved before the numerical core was split into packages name their classes by the old
+# flat module paths; reading them maps those paths to where the classes live now.
+_MOVED_MODULES = {
+    "analysis.model": "analysis.pipeline.model",
+    "analysis.model_fit": "analysis.pipeline.model_fit",
+    "analysis.bvh": "analysis.bvh.io",
+    "analysis.segmentation": "analysis.landmarks.segmentation",
+    "analysis.scoring": "analysis.assessment.scoring",
+    "analysis.assessment": "analysis.assessment.joints",
+    "analysis.signature": "analysis.landmarks.signature",
+    "analysis.landmarks": "analysis.landmarks.identification",
+    "analysis.refining": "analysis.landmarks.refining",
+    "analysis.gbdtw": "analysis.online.gbdtw",
+    "analysis.dtw": "analysis.dtw.offline",
+    "analysis.frame_costs": "analysis.dtw.frame_costs",
+}
+
+
+class ModelVersionError(ValueError):
+    """A saved exercise model was written by an incompatible version of this code."""
+
+
+class _ModelUnpickler(pickle.Unpickler):
+    def find_class(self, module: str, name: str) -> Any:
+        return super().find_class(_MOVED_MODULES.get(module, module), name)
+
+
+@dataclass(frozen=True, eq=False)
+class ExerciseModel:
+    """A fitted exercise model (see the module docstring); ``components`` holds fitted parts."""
+
+    format_version: int
+    code_version: str
+    tutor: Motion
+    landmark_frames: tuple[int, ...]
+    landmark_types: tuple[int, ...]
+    type_names: dict[int, str]
+    involved_joints: tuple[str, ...]
+    grammar: str
+    components: ModelComponents
+    report: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return self.tutor.skeleton.names
+
+    @property
+    def fps(self) -> float:
+        return self.tutor.fps
+
+
+def _check_landmarks(tutor: Motion, frames: Sequence[int], types: Sequence[int]) -> None:
+    if len(frames) != len(types) or len(frames) < 2:
+        raise ValueError("give as many landmark types as frames, and at least two landmarks")
+    if any(f < 0 or f >= tutor.n_frames for f in frames):
+        raise ValueError(f"landmark frames must lie within the tutor's {tutor.n_frames} frames")
+    if list(frames) != sorted(frames):
+        raise ValueError("landmark frames must be in time order")
+    if 1 not in types:
+        raise ValueError("type 1 marks where each repetition starts; the tutor needs it")
+
+
+def build_model(
+    tutor: Motion,
+    landmark_frames: Sequence[int],
+    landmark_types: Sequence[int],
+    *,
+    joints: Sequence[str] | None = None,
+    type_names: Mapping[int, str] | None = None,
+    grammar: str | None = None,
+    training: Sequence[TrainingRecording] = (),
+    on_progress: Progress | None = None,
+) -> ExerciseModel:
+    """Fit the model of an exercise from its tutor (and labelled recordings, if any)."""
+    _check_landmarks(tutor, landmark_frames, landmark_types)
+    names = dict(type_names or {})
+    for t in sorted(set(landmark_types)):
+        names.setdefault(int(t), "start" if t == 1 else f"key pose {t}")
+    components, involved, report = fit_components(
+        tutor, list(landmark_frames), list(landmark_types), joints, training, on_progress
+    )
+    text = grammar or default_grammar(list(involved), names)
+    Grammar.parse(text)  # a bad grammar fails the build, not every analysis
+    return ExerciseModel(
+        format_version=FORMAT_VERSION,
+        code_version=code_version,
+        tutor=tutor,
+        landmark_frames=tuple(int(f) for f in landmark_frames),
+        landmark_types=tuple(int(t) for t in landmark_types),
+        type_names=names,
+        involved_joints=tuple(involved),
+        grammar=text,
+        components=components,
+        report=report,
+    )
+
+
+def dump_model(model: ExerciseModel, out: IO[bytes]) -> None:
+    """Write the model (a format header, then a pickle of the fitted parts)."""
+    out.write(MAGIC)
+    out.write(f"{FORMAT_VERSION}\n".encode())
+    pickle.dump(model, out, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def load_model(source: bytes | IO[bytes]) -> ExerciseModel:
+    """Read a model written by `dump_model`; refuses other formats. Only load files you wrote."""
+    stream = io.BytesIO(source) if isinstance(source, bytes) else source
+    if stream.read(len(MAGIC)) != MAGIC:
+        raise ModelVersionError("this is not an exercise model file")
+    version = stream.readline().strip()
+    if version != str(FORMAT_VERSION).encode():
+        raise ModelVersionError(
+            f"the model was saved in format {version.decode(errors='replace')}; this code reads "
+            f"format {FORMAT_VERSION}. Rebuild the exercise model."
+        )
+    model = _ModelUnpickler(stream).load()
+    if not isinstance(model, ExerciseModel):
+        raise ModelVersionError("the model file holds something else")
+    if isinstance(model.components, dict):  # saved before the parts were typed
+        object.__setattr__(model, "components", ModelComponents(**model.components))
+    return model

@@ -1,0 +1,78 @@
+"""First stages of the pipeline: check the recording, map its joints, match the tutor's frame rate,
+and compute the pose features the later stages share."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from analysis.bvh import Motion, RecordingTooShortError, map_joints
+from analysis.kinematics import flatten, joint_angles, resample, rotations, scaled_positions
+from analysis.landmarks import ProgressAxis
+
+FloatArray = npt.NDArray[np.float64]
+MIN_SECONDS = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """The recording at the model's frame rate, with its joints in the model's order.
+
+    ``points``: (F, J, 3) scaled, root-relative, heading-normalised positions; ``local_q``:
+    (F, J, 4) local rotations; ``angles``: {model joint name: (F,) degrees}.
+    """
+
+    motion: Motion
+    joint_index: list[int]
+    points: FloatArray
+    local_q: FloatArray
+    angles: dict[str, FloatArray]
+
+    @property
+    def n_frames(self) -> int:
+        return int(self.points.shape[0])
+
+
+def check_length(motion: Motion, rep_frames: float, model_fps: float) -> None:
+    seconds = motion.duration
+    needed = max(MIN_SECONDS, 0.5 * rep_frames / model_fps)
+    if motion.n_frames < 4 or seconds < needed:
+        raise RecordingTooShortError(
+            f"The recording lasts {seconds:.1f} s ({motion.n_frames} frames); at least "
+            f"{needed:.1f} s are needed to hold one repetition."
+        )
+
+
+def prepare(
+    motion: Motion, model_names: tuple[str, ...], fps: float, rep_frames: float
+) -> Prepared:
+    """Map joints (SkeletonMismatchError if impossible), resample, compute features."""
+    mapping = map_joints(model_names, motion.skeleton.names)
+    check_length(motion, rep_frames, fps)
+    at_rate = resample(motion, fps)
+    index = [at_rate.skeleton.names.index(mapping[n]) for n in model_names]
+    points = scaled_positions(at_rate, index)
+    own_angles = joint_angles(at_rate)
+    angles = {n: own_angles[mapping[n]] for n in model_names if mapping[n] in own_angles}
+    return Prepared(at_rate, index, points, rotations(at_rate)[:, index], angles)
+
+
+def mirrored(points: FloatArray, mirror: list[int]) -> FloatArray:
+    """The left/right mirror image of (F, J, 3) heading-normalised positions (x is lateral)."""
+    out = points[:, mirror].copy()
+    out[..., 0] *= -1.0
+    return out
+
+
+def progress_signal(
+    prepared: Prepared, axis: ProgressAxis, mirror_index: list[int]
+) -> tuple[FloatArray, bool]:
+    """The progress signal on the tutor's axis, from the recording or its mirror image, whichever
+    moves more along it (a patient may do a one-sided exercise with the other side first)."""
+    direct = axis.progress(flatten(prepared.points))
+    mirror = axis.progress(flatten(mirrored(prepared.points, mirror_index)))
+    spans = [float(np.percentile(s, 95) - np.percentile(s, 5)) for s in (direct, mirror)]
+    use_mirror = spans[1] > 1.25 * spans[0]
+    return (mirror if use_mirror else direct), use_mirror

@@ -1,0 +1,147 @@
+"""The stages of `analysis.pipeline` after preparation: landmarks, repetition scores, per-joint
+assessment, feedback, performance level and playback arrays. Each returns the typed results of
+`analysis.pipeline.results`."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from analysis.adjustment import Performance, demonstration_skeletons, gamma_vector
+from analysis.assessment import guidance_for, landmark_features, repetition_features, update_levels
+from analysis.feedback import Comment, Grammar, LandmarkAssessment
+from analysis.kinematics import flatten, range_of_motion, relative_to_start, translations
+from analysis.kinematics import quaternions as quat
+from analysis.landmarks import Segments
+from analysis.pipeline.model import ExerciseModel
+from analysis.pipeline.prepare import Prepared
+from analysis.pipeline.results import KeyPose, RepetitionResult
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def label_landmarks(
+    prepared: Prepared, segments: Segments, model: ExerciseModel
+) -> tuple[KeyPose, ...]:
+    """Type 1 at each repetition start (and the last end); at each end of range, the tutor's
+    non-start landmark type whose mean pose is closest."""
+    peak_types = sorted({t for t in model.landmark_types if t != 1}) or [2]
+    marks: list[KeyPose] = []
+    for start, peak in zip(segments.starts, segments.peaks, strict=True):
+        marks.append(KeyPose(int(start), 1))
+        marks.append(KeyPose(int(peak), _closest_type(prepared, int(peak), peak_types, model)))
+    if segments.ends.size:
+        marks.append(KeyPose(int(segments.ends[-1]), 1))
+    return tuple(marks)
+
+
+def _closest_type(prepared: Prepared, frame: int, types: list[int], model: ExerciseModel) -> int:
+    if len(types) == 1:
+        return types[0]
+    pose = prepared.local_q[frame]
+    means = model.components.mean_poses
+    costs = [quat.angle_between(means[t], pose).sum() if t in means else np.inf for t in types]
+    return types[int(np.argmin(costs))]
+
+
+def repetition_results(
+    prepared: Prepared, segments: Segments, progress: FloatArray, model: ExerciseModel
+) -> tuple[RepetitionResult, ...]:
+    """Per repetition: frames, score 0–100, distance to the tutor, guidance, tempo."""
+    parts = model.components
+    movement = flatten(prepared.points[:, parts.scored_index])
+    tutor_frames = float(np.median([len(t) for t in parts.templates]))
+    step = parts.scoring_step
+    out = []
+    for start, end, peak in zip(segments.starts, segments.ends, segments.peaks, strict=True):
+        segment = relative_to_start(movement[start : end + 1])
+        features = repetition_features(segment[::step], [t[::step] for t in parts.templates])
+        dev = features[: len(parts.scored_index)]
+        reach = float(progress[peak] - progress[start])
+        tempo = (end - start + 1) / tutor_frames
+        out.append(RepetitionResult(
+            start=int(start), end=int(end), peak=int(peak),
+            score=round(parts.scorer.score(features), 2),
+            deviation=round(float(dev.mean()), 5), reach=round(reach, 3),
+            tempo=round(float(tempo), 3), guidance=guidance_for(tempo, reach),
+        ))  # fmt: skip
+    return tuple(out)
+
+
+def assess_landmarks(
+    prepared: Prepared, landmarks: tuple[KeyPose, ...], model: ExerciseModel
+) -> tuple[LandmarkAssessment, ...]:
+    """Per landmark, a level 1 (as the tutor) … 4 for every involved joint."""
+    means = model.components.mean_poses
+    marks = [m for m in landmarks if m.type in means]
+    if not marks:
+        return ()
+    frames, types = [m.frame for m in marks], [m.type for m in marks]
+    features = landmark_features(prepared.local_q, frames, types, means)
+    levels = model.components.assessor.predict(features, types)
+    names, involved = model.joint_names, model.components.involved_index
+    return tuple(
+        LandmarkAssessment(f, t, {names[j]: int(row[j]) for j in involved if row[j] > 0})
+        for f, t, row in zip(frames, types, levels, strict=True)
+    )
+
+
+def feedback_items(
+    assessment: tuple[LandmarkAssessment, ...],
+    model: ExerciseModel,
+    history: Mapping[str, float] | None,
+) -> tuple[tuple[Comment, ...], dict[str, float]]:
+    """Feedback sentences from the exercise's grammar, and the updated performance level γ."""
+    grammar = Grammar.parse(model.grammar)
+    comments = tuple(grammar.comments(list(assessment)))
+    per_joint: dict[str, list[int]] = {}
+    for item in assessment:
+        for joint, level in item.levels.items():
+            per_joint.setdefault(joint, []).append(level)
+    gamma = update_levels(history, per_joint)
+    return comments, {j: round(v, 4) for j, v in gamma.items()}
+
+
+def playback_arrays(
+    prepared: Prepared,
+    landmarks: tuple[KeyPose, ...],
+    model: ExerciseModel,
+    gamma: Mapping[str, float],
+) -> dict[str, npt.NDArray[Any]]:
+    """The four demonstration skeletons (paper 004, 7.3) as world positions (F, J, 3) float32 on
+    the patient's timeline, with the model's joint names and parents, and the landmarks."""
+    skeleton = model.tutor.skeleton
+    frames = np.array([m.frame for m in landmarks], dtype=np.int64)
+    types = np.array([m.type for m in landmarks], dtype=np.int64)
+    patient_t = translations(prepared.motion)[:, prepared.joint_index]
+    patient = Performance(prepared.local_q, patient_t, frames, types)
+    tutor = Performance.from_motion(model.tutor, model.landmark_frames, model.landmark_types)
+    demo = demonstration_skeletons(
+        skeleton, patient, tutor, model.components.mean_poses,
+        gamma_vector(dict(gamma), skeleton.names), tutor_root="patient",
+    )  # fmt: skip
+    return {
+        "patient_positions": demo.patient.astype(np.float32),
+        "patient_adjusted_positions": demo.patient_adjusted.astype(np.float32),
+        "tutor_positions": demo.tutor.astype(np.float32),
+        "tutor_adjusted_positions": demo.tutor_adjusted.astype(np.float32),
+        "tutor_frame_map": demo.tutor_frame_map.astype(np.float32),
+        "parents": skeleton.parents.astype(np.int32),
+        "joint_names": np.array(skeleton.names),
+        "landmark_frames": frames.astype(np.int32),
+        "landmark_types": types.astype(np.int32),
+    }
+
+
+def tempo_median(repetitions: tuple[RepetitionResult, ...]) -> float | None:
+    """The median tempo of the repetitions against the tutor (None without repetitions)."""
+    tempos = [r.tempo for r in repetitions]
+    return round(float(np.median(tempos)), 3) if tempos else None
+
+
+def joint_ranges(prepared: Prepared, model: ExerciseModel) -> dict[str, float]:
+    """Range of motion (degrees) per involved joint."""
+    return range_of_motion(prepared.angles, list(model.involved_joints))
