@@ -12,8 +12,7 @@ from django.utils import timezone
 
 from analysis import __version__ as code_version
 from analysis.bvh import read
-from analysis.pipeline import ExerciseModel as FittedModel
-from analysis.pipeline import build_model, dump_model, load_model
+from analysis.pipeline import FittedModel, build_model, dump_model, load_model
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from workers import training
 

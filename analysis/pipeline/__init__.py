@@ -4,7 +4,7 @@
 """
 
 from analysis.pipeline.model import (
-    ExerciseModel,
+    FittedModel,
     ModelVersionError,
     build_model,
     dump_model,
@@ -17,7 +17,7 @@ from analysis.pipeline.run import AnalysisResult, analyse
 __all__ = [
     "AnalysisResult",
     "AnalysisSummary",
-    "ExerciseModel",
+    "FittedModel",
     "KeyPose",
     "ModelComponents",
     "ModelVersionError",

@@ -53,11 +53,13 @@ class ModelVersionError(ValueError):
 
 class _ModelUnpickler(pickle.Unpickler):
     def find_class(self, module: str, name: str) -> Any:
+        if (module, name) == ("analysis.model", "ExerciseModel"):
+            name = "FittedModel"
         return super().find_class(_MOVED_MODULES.get(module, module), name)
 
 
 @dataclass(frozen=True, eq=False)
-class ExerciseModel:
+class FittedModel:
     """A fitted exercise model (see the module docstring); ``components`` holds fitted parts."""
 
     format_version: int
@@ -101,7 +103,7 @@ def build_model(
     grammar: str | None = None,
     training: Sequence[TrainingRecording] = (),
     on_progress: Progress | None = None,
-) -> ExerciseModel:
+) -> FittedModel:
     """Fit the model of an exercise from its tutor (and labelled recordings, if any)."""
     _check_landmarks(tutor, landmark_frames, landmark_types)
     names = dict(type_names or {})
@@ -112,7 +114,7 @@ def build_model(
     )
     text = grammar or default_grammar(list(involved), names)
     Grammar.parse(text)  # a bad grammar fails the build, not every analysis
-    return ExerciseModel(
+    return FittedModel(
         format_version=FORMAT_VERSION,
         code_version=code_version,
         tutor=tutor,
@@ -126,14 +128,14 @@ def build_model(
     )
 
 
-def dump_model(model: ExerciseModel, out: IO[bytes]) -> None:
+def dump_model(model: FittedModel, out: IO[bytes]) -> None:
     """Write the model (a format header, then a pickle of the fitted parts)."""
     out.write(MAGIC)
     out.write(f"{FORMAT_VERSION}\n".encode())
     pickle.dump(model, out, protocol=pickle.HIGHEST_PROTOCOL)
 
 
-def load_model(source: bytes | IO[bytes]) -> ExerciseModel:
+def load_model(source: bytes | IO[bytes]) -> FittedModel:
     """Read a model written by `dump_model`; refuses other formats. Only load files you wrote."""
     stream = io.BytesIO(source) if isinstance(source, bytes) else source
     if stream.read(len(MAGIC)) != MAGIC:
@@ -145,7 +147,7 @@ def load_model(source: bytes | IO[bytes]) -> ExerciseModel:
             f"format {FORMAT_VERSION}. Rebuild the exercise model."
         )
     model = _ModelUnpickler(stream).load()
-    if not isinstance(model, ExerciseModel):
+    if not isinstance(model, FittedModel):
         raise ModelVersionError("the model file holds something else")
     if isinstance(model.components, dict):  # saved before the parts were typed
         object.__setattr__(model, "components", ModelComponents(**model.components))

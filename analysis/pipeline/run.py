@@ -20,7 +20,7 @@ import numpy.typing as npt
 
 from analysis.bvh import Motion
 from analysis.landmarks import segment
-from analysis.pipeline.model import ExerciseModel
+from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import mirrored, prepare, progress_signal
 from analysis.pipeline.results import AnalysisSummary, RepetitionResult
 from analysis.pipeline.stages import (
@@ -76,7 +76,7 @@ STAGES = ["prepare", "repetitions", "scores", "assessment", "feedback", "playbac
 
 def analyse(
     motion: Motion,
-    model: ExerciseModel,
+    model: FittedModel,
     history: Mapping[str, float] | None = None,
     on_progress: Progress | None = None,
 ) -> AnalysisResult:

@@ -16,7 +16,7 @@ from analysis.feedback import Comment, Grammar, LandmarkAssessment
 from analysis.kinematics import flatten, range_of_motion, relative_to_start, translations
 from analysis.kinematics import quaternions as quat
 from analysis.landmarks import Segments
-from analysis.pipeline.model import ExerciseModel
+from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import Prepared
 from analysis.pipeline.results import KeyPose, RepetitionResult
 
@@ -24,7 +24,7 @@ FloatArray = npt.NDArray[np.float64]
 
 
 def label_landmarks(
-    prepared: Prepared, segments: Segments, model: ExerciseModel
+    prepared: Prepared, segments: Segments, model: FittedModel
 ) -> tuple[KeyPose, ...]:
     """Type 1 at each repetition start (and the last end); at each end of range, the tutor's
     non-start landmark type whose mean pose is closest."""
@@ -38,7 +38,7 @@ def label_landmarks(
     return tuple(marks)
 
 
-def _closest_type(prepared: Prepared, frame: int, types: list[int], model: ExerciseModel) -> int:
+def _closest_type(prepared: Prepared, frame: int, types: list[int], model: FittedModel) -> int:
     if len(types) == 1:
         return types[0]
     pose = prepared.local_q[frame]
@@ -48,7 +48,7 @@ def _closest_type(prepared: Prepared, frame: int, types: list[int], model: Exerc
 
 
 def repetition_results(
-    prepared: Prepared, segments: Segments, progress: FloatArray, model: ExerciseModel
+    prepared: Prepared, segments: Segments, progress: FloatArray, model: FittedModel
 ) -> tuple[RepetitionResult, ...]:
     """Per repetition: frames, score 0–100, distance to the tutor, guidance, tempo."""
     parts = model.components
@@ -72,7 +72,7 @@ def repetition_results(
 
 
 def assess_landmarks(
-    prepared: Prepared, landmarks: tuple[KeyPose, ...], model: ExerciseModel
+    prepared: Prepared, landmarks: tuple[KeyPose, ...], model: FittedModel
 ) -> tuple[LandmarkAssessment, ...]:
     """Per landmark, a level 1 (as the tutor) … 4 for every involved joint."""
     means = model.components.mean_poses
@@ -91,7 +91,7 @@ def assess_landmarks(
 
 def feedback_items(
     assessment: tuple[LandmarkAssessment, ...],
-    model: ExerciseModel,
+    model: FittedModel,
     history: Mapping[str, float] | None,
 ) -> tuple[tuple[Comment, ...], dict[str, float]]:
     """Feedback sentences from the exercise's grammar, and the updated performance level γ."""
@@ -108,7 +108,7 @@ def feedback_items(
 def playback_arrays(
     prepared: Prepared,
     landmarks: tuple[KeyPose, ...],
-    model: ExerciseModel,
+    model: FittedModel,
     gamma: Mapping[str, float],
 ) -> dict[str, npt.NDArray[Any]]:
     """The four demonstration skeletons (paper 004, 7.3) as world positions (F, J, 3) float32 on
@@ -142,6 +142,6 @@ def tempo_median(repetitions: tuple[RepetitionResult, ...]) -> float | None:
     return round(float(np.median(tempos)), 3) if tempos else None
 
 
-def joint_ranges(prepared: Prepared, model: ExerciseModel) -> dict[str, float]:
+def joint_ranges(prepared: Prepared, model: FittedModel) -> dict[str, float]:
     """Range of motion (degrees) per involved joint."""
     return range_of_motion(prepared.angles, list(model.involved_joints))
