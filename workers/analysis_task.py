@@ -7,6 +7,7 @@ import logging
 import socket
 import time
 import traceback
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -16,9 +17,9 @@ from django.db import InterfaceError, OperationalError, transaction
 
 from analysis import __version__ as code_version
 from analysis.bvh import AnalysisInputError, read
-from analysis.pipeline import analyse
+from analysis.pipeline import AnalysisResult, analyse
 from webapp.patients.models import PerformanceLevel
-from webapp.recordings.models import AnalysisRun, summary_score
+from webapp.recordings.models import AnalysisRun
 from webapp.recordings.storage import read_verified
 from workers import exercise_models, runs
 
@@ -65,7 +66,7 @@ def analyse_claimed(run_id: str, token: str) -> str:
         pk=run_id
     )
     try:
-        summary, arrays, model_row = compute(run, token)
+        result, model_row = compute(run, token)
     except TRANSIENT_ERRORS:
         raise
     except AnalysisInputError as error:
@@ -75,11 +76,11 @@ def analyse_claimed(run_id: str, token: str) -> str:
         log.exception("analysis %s failed", run_id)
         runs.fail(run_id, token, GENERIC_FAILURE, f"{error!r}\n{traceback.format_exc()}")
         return "failed"
-    store(run, token, summary, arrays, model_row)
+    store(run, token, result, model_row)
     return "succeeded"
 
 
-def compute(run: AnalysisRun, token: str) -> tuple[dict[str, Any], dict[str, np.ndarray], Any]:
+def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
     recording = run.recording
     if recording.exercise is None:
         raise AnalysisInputError("Choose the exercise of this recording before analysing it.")
@@ -92,8 +93,7 @@ def compute(run: AnalysisRun, token: str) -> tuple[dict[str, Any], dict[str, np.
         runs.report(str(run.pk), token, stage, 5 + int(90 * fraction))
         stage_delay()
 
-    result = analyse(motion, model, history=history, on_progress=on_progress)
-    return result.to_json(), result.arrays(), model_row
+    return analyse(motion, model, history=history, on_progress=on_progress), model_row
 
 
 def stage_delay() -> None:
@@ -120,30 +120,30 @@ def npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
     return buffer.getvalue()
 
 
-def store(run: AnalysisRun, token: str, summary: dict, arrays: dict, model_row) -> None:
+def store(run: AnalysisRun, token: str, result: AnalysisResult, model_row) -> None:
     """Write the arrays file, then the result in one transaction; no file outlives a failure."""
     name = f"{run.pk}.npz"
-    stored = run.arrays.storage.save(f"runs/{name}", ContentFile(npz_bytes(arrays)))
+    stored = run.arrays.storage.save(f"runs/{name}", ContentFile(npz_bytes(result.arrays())))
     finished = False
     try:
         with transaction.atomic():
             finished = runs.succeed(
                 str(run.pk),
                 token,
-                summary=summary,
-                score=summary_score(summary),
+                summary=result.to_json(),
+                score=result.summary.score,
                 arrays=stored,
                 model=model_row,
                 code_version=code_version,
             )
             if finished:
-                save_levels(run, summary.get("gamma", {}))
+                save_levels(run, result.summary.gamma)
     finally:
         if not finished:
             run.arrays.storage.delete(stored)
 
 
-def save_levels(run: AnalysisRun, gamma: dict[str, float]) -> None:
+def save_levels(run: AnalysisRun, gamma: Mapping[str, float]) -> None:
     recording = run.recording
     for joint, value in gamma.items():
         PerformanceLevel.objects.update_or_create(

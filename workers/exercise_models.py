@@ -7,11 +7,9 @@ from typing import Any
 
 from django.core.files.base import ContentFile
 from django.db import transaction
-from django.db.models import Max
 from django.utils import timezone
 
 from analysis import __version__ as code_version
-from analysis.bvh import read
 from analysis.pipeline import FittedModel, build_model, dump_model, load_model
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from workers import training
@@ -21,10 +19,8 @@ _cache: dict[str, FittedModel] = {}
 
 
 def fit_for_exercise(exercise: Exercise, on_progress=None) -> FittedModel:
-    with exercise.tutor_file.open("rb") as handle:
-        tutor = read(handle.read())
     return build_model(
-        tutor,
+        exercise.tutor_motion(),
         landmark_frames=list(exercise.tutor_landmark_frames),
         landmark_types=list(exercise.tutor_landmark_types),
         joints=list(exercise.involved_joints) or None,
@@ -33,11 +29,6 @@ def fit_for_exercise(exercise: Exercise, on_progress=None) -> FittedModel:
         training=training.training_recordings(exercise),
         on_progress=on_progress,
     )
-
-
-def next_version(exercise: Exercise) -> int:
-    latest = ExerciseModel.objects.filter(exercise=exercise).aggregate(v=Max("version"))["v"]
-    return (latest or 0) + 1
 
 
 def save_fitted(row: ExerciseModel, fitted: FittedModel) -> None:
@@ -61,9 +52,7 @@ def build_now(exercise: Exercise) -> tuple[ExerciseModel, FittedModel]:
         if locked.active_model_id is not None:
             row = ExerciseModel.objects.get(pk=locked.active_model_id)
             return row, load_row(row)
-        row = ExerciseModel.objects.create(
-            exercise=locked, version=next_version(locked), status=ModelStatus.RUNNING
-        )
+        row = ExerciseModel.objects.create_next_version(locked, status=ModelStatus.RUNNING)
         fitted = fit_for_exercise(locked)
         save_fitted(row, fitted)
         Exercise.objects.filter(pk=locked.pk).update(active_model=row)

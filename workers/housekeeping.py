@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from datetime import timedelta
 
 from django.conf import settings
@@ -61,11 +62,12 @@ def max_enqueues() -> int:
     return int(getattr(settings, "ANALYSIS_MAX_ENQUEUES", 4))
 
 
-def requeue_lost_runs() -> dict[str, int]:
+def requeue_lost_runs(enqueue: Callable[[str], object]) -> dict[str, int]:
     """Enqueue again QUEUED runs not started within `requeue_after_seconds`; after
-    `max_enqueues` attempts fail them with a reason instead. Returns both counts."""
-    from workers.tasks import analyse_recording
+    `max_enqueues` attempts fail them with a reason instead. Returns both counts.
 
+    `enqueue(run_id)` hands a run to the broker (the task module passes the analysis task's).
+    """
     cutoff = timezone.now() - timedelta(seconds=requeue_after_seconds())
     stale = AnalysisRun.objects.filter(status=RunStatus.QUEUED, enqueued_at__lt=cutoff)
     failed = stale.filter(enqueue_count__gte=max_enqueues()).update(
@@ -82,7 +84,7 @@ def requeue_lost_runs() -> dict[str, int]:
             pk=run_id, status=RunStatus.QUEUED, enqueued_at__lt=cutoff
         ).update(enqueued_at=timezone.now(), enqueue_count=F("enqueue_count") + 1)
         if taken:
-            analyse_recording.delay(str(run_id))
+            enqueue(str(run_id))
             requeued += 1
     return {"requeued": requeued, "failed": failed}
 

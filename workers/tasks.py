@@ -1,4 +1,6 @@
-"""Celery tasks. Each takes ids (JSON), loads what it needs and delegates the work."""
+"""Every Celery task of the project. Each takes ids (JSON), loads what it needs and delegates the
+work to a module of `workers` (which never imports this one: tasks that enqueue others pass
+them down, so there is no import cycle)."""
 
 from __future__ import annotations
 
@@ -6,7 +8,7 @@ from typing import Any
 
 from celery import shared_task
 
-from workers import analysis_task, exercise_models, housekeeping, inspection, training
+from workers import analysis_task, exercise_models, housekeeping, inspection, reports, training
 
 
 @shared_task(name="workers.tasks.inspect_recording", autoretry_for=(OSError,), max_retries=3)
@@ -55,7 +57,15 @@ def analyse_recording(self, run_id: str, token: str | None = None) -> str:
 @shared_task(name="workers.tasks.requeue_lost_runs", ignore_result=True)
 def requeue_lost_runs() -> dict[str, int]:
     """Enqueue again runs QUEUED for too long (their message was lost); fail hopeless ones."""
-    return housekeeping.requeue_lost_runs()
+    return housekeeping.requeue_lost_runs(enqueue=enqueue_analysis)
+
+
+def enqueue_analysis(run_id: str) -> None:
+    analyse_recording.delay(run_id)
+
+
+def enqueue_model_build(model_id: str) -> None:
+    build_exercise_model.delay(model_id)
 
 
 @shared_task(name="workers.tasks.purge_deleted_patients", ignore_result=True)
@@ -73,10 +83,18 @@ def build_exercise_model(model_id: str) -> str:
 @shared_task(name="workers.tasks.rebuild_models_with_corrections")
 def rebuild_models_with_corrections() -> list[str]:
     """Queue a new model version for exercises whose therapists corrected analyses since."""
-    return training.rebuild_models_with_corrections()
+    return training.rebuild_models_with_corrections(enqueue=enqueue_model_build)
 
 
 @shared_task(name="workers.tasks.refit_pass_thresholds")
 def refit_pass_thresholds() -> int:
     """Refit paper 001's pass/fail threshold of each exercise from therapist verdicts."""
     return training.refit_pass_thresholds()
+
+
+@shared_task(name="workers.tasks.make_report", autoretry_for=(OSError,), max_retries=3)
+def make_report(
+    kind: str, object_id: str, name: str, since: str | None = None, until: str | None = None
+) -> str:
+    """Render one PDF report ("recording" or "progress") into storage under `name`."""
+    return reports.make_report(kind, object_id, name, since, until)

@@ -10,8 +10,10 @@ distributions of passed and failed repetitions, eqs 13-15) refitted from therapi
 from __future__ import annotations
 
 import statistics
+from collections.abc import Callable
 from typing import Any
 
+from django.db import transaction
 from django.db.models import Q
 from django.utils import timezone
 
@@ -46,7 +48,8 @@ def run_label(run: AnalysisRun) -> str:
     corrected = list(run.assessment_fixes.values_list("level", flat=True))
     if corrected:
         return str(max(1, min(4, max(corrected))))
-    worst = [max(a["levels"].values()) for a in run.summary.get("assessment", []) if a["levels"]]
+    assessment = run.result.assessment if run.result else ()
+    worst = [max(a.levels.values()) for a in assessment if a.levels]
     return str(max(1, min(4, round(statistics.median(worst))))) if worst else "correct"
 
 
@@ -55,8 +58,8 @@ def training_recording(run: AnalysisRun) -> TrainingRecording:
     if fix is not None:
         frames, types = fix.frames, fix.types
     else:
-        marks = run.summary.get("landmarks", [])
-        frames, types = [m["frame"] for m in marks], [m["type"] for m in marks]
+        marks = run.result.landmarks if run.result else ()
+        frames, types = [m.frame for m in marks], [m.type for m in marks]
     motion = read(read_verified(run.recording))
     return TrainingRecording(motion, tuple(frames), tuple(types), run_label(run))
 
@@ -86,20 +89,28 @@ def mark_used(exercise: Exercise, model: ExerciseModel) -> None:
     )
 
 
-def rebuild_models_with_corrections() -> list[str]:
-    """Queue a new model version for every exercise with unused corrections; returns row ids."""
-    from webapp.exercises.services import start_model_build
+def rebuild_models_with_corrections(enqueue: Callable[[str], object]) -> list[str]:
+    """Queue a new model version for every exercise with unused corrections; returns row ids.
 
-    return [str(start_model_build(exercise).pk) for exercise in pending_exercises()]
+    `enqueue(model_id)` hands each new row to the broker after the commit (the task module
+    passes the build task's).
+    """
+    queued = []
+    for exercise in pending_exercises():
+        with transaction.atomic():
+            row_id = str(ExerciseModel.objects.create_next_version(exercise).pk)
+            transaction.on_commit(lambda row_id=row_id: enqueue(row_id))
+        queued.append(row_id)
+    return queued
 
 
 def threshold_data(exercise: Exercise) -> tuple[list[float], list[bool]]:
     scores, failed = [], []
     labels = RepetitionLabel.objects.filter(run__recording__exercise=exercise).select_related("run")
     for label in labels:
-        repetitions = label.run.summary.get("repetitions", [])
+        repetitions = label.run.result.repetitions if label.run.result else ()
         if label.index < len(repetitions):
-            scores.append(float(repetitions[label.index]["score"]))
+            scores.append(repetitions[label.index].score)
             failed.append(not label.passed)
     return scores, failed
 

@@ -25,8 +25,8 @@ from django.core.management import call_command  # noqa: E402
 from django.test import Client  # noqa: E402
 
 from webapp.accounts.models import Clinic, Role, User  # noqa: E402
-from webapp.dashboard.demo import DEMO_CLINIC, DEMO_EXERCISES, UI_PRMD  # noqa: E402
-from webapp.dashboard.management.commands.fill_large_clinic import (  # noqa: E402
+from webapp.demo.clinic import DEMO_CLINIC, DEMO_EXERCISES, UI_PRMD  # noqa: E402
+from webapp.demo.management.commands.fill_large_clinic import (  # noqa: E402
     THERAPIST_PASSWORD,
 )
 from webapp.exercises.models import Exercise  # noqa: E402

@@ -11,7 +11,7 @@ from rest_framework.test import APIClient
 from tests.personas import make_exercise, make_recording
 from webapp.exercises.models import Exercise
 from webapp.recordings.models import AssessmentCorrection, LandmarkCorrection, RepetitionLabel
-from workers import training
+from workers import tasks, training
 from workers.analysis_task import analyse_run
 
 
@@ -87,7 +87,7 @@ def test_beat_rebuilds_the_model_from_new_corrections(
     world, run, django_capture_on_commit_callbacks
 ):
     exercise = run.recording.exercise
-    assert training.rebuild_models_with_corrections() == []  # nothing corrected yet
+    assert tasks.rebuild_models_with_corrections() == []  # nothing corrected yet
     LandmarkCorrection.objects.create(
         run=run,
         frames=[m["frame"] for m in run.summary["landmarks"]],
@@ -95,12 +95,12 @@ def test_beat_rebuilds_the_model_from_new_corrections(
         author=world.therapist,
     )
     with django_capture_on_commit_callbacks(execute=True):
-        queued = training.rebuild_models_with_corrections()
+        queued = tasks.rebuild_models_with_corrections()
     assert len(queued) == 1
     exercise.refresh_from_db()
     assert exercise.active_model.version == 2 and exercise.active_model.status == "ready"
     assert LandmarkCorrection.objects.get().used_in_model == exercise.active_model
-    assert training.rebuild_models_with_corrections() == []  # used: not rebuilt again
+    assert tasks.rebuild_models_with_corrections() == []  # used: not rebuilt again
 
 
 def test_beat_refits_the_pass_fail_threshold(client, world, run):

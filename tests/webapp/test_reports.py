@@ -116,7 +116,7 @@ def test_recording_pdf_is_generated_by_the_task_after_commit(
 def test_task_renders_progress_report(world, recording, settings):
     from django.core.files.storage import default_storage
 
-    from webapp.reports.tasks import make_report
+    from workers.tasks import make_report
 
     analysed(recording)
     name = make_report.delay("progress", str(world.patient.pk), "reports/p.pdf").get()

@@ -22,7 +22,8 @@ from tests.workers.test_api_flow import TUTOR, token_client, upload
 from tests.workers.test_worker_crash import stored_arrays
 from webapp.patients.models import Patient, PerformanceLevel
 from webapp.recordings.models import AnalysisRun, RunStatus
-from workers.housekeeping import reap_stuck_runs, requeue_lost_runs
+from workers.housekeeping import reap_stuck_runs
+from workers.tasks import requeue_lost_runs
 
 pytestmark = [pytest.mark.integration, needs_services, pytest.mark.django_db(transaction=True)]
 

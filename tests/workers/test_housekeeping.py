@@ -10,8 +10,8 @@ from workers.housekeeping import (
     REAPED_USER_MESSAGE,
     reap_stuck_runs,
     reap_window_seconds,
-    requeue_lost_runs,
 )
+from workers.tasks import requeue_lost_runs
 
 
 @pytest.fixture

@@ -1,1 +1,1 @@
-"""The therapist's home page, health check and the demo clinic loader."""
+"""The therapist's home page (patients needing attention, runs under way) and the health check."""

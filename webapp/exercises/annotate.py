@@ -17,18 +17,12 @@ from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import render
 from django.views.decorators.http import require_POST
 
-from analysis.bvh import read
 from analysis.feedback import Grammar, GrammarError
 from analysis.kinematics import rotations
 from analysis.landmarks import suggest_key_poses
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
 from webapp.exercises.forms import LandmarksForm
 from webapp.exercises.models import Exercise
-
-
-def tutor_motion(exercise: Exercise):
-    with exercise.tutor_file.open("rb") as handle:
-        return read(handle.read())
 
 
 def angle_curves(motion) -> dict[str, list[float]]:
@@ -51,7 +45,7 @@ def annotate_page(request: HttpRequest, pk) -> HttpResponse:
 @require_staff
 def tutor_data(request: HttpRequest, pk) -> JsonResponse:
     exercise = get_exercise_for_user(request, pk)
-    motion = tutor_motion(exercise)
+    motion = exercise.tutor_motion()
     suggestion = suggest_key_poses(motion)
     return JsonResponse(
         {
@@ -74,7 +68,7 @@ def tutor_data(request: HttpRequest, pk) -> JsonResponse:
 @require_POST
 def save_landmarks(request: HttpRequest, pk) -> JsonResponse:
     exercise = get_exercise_for_user(request, pk)
-    motion = tutor_motion(exercise)
+    motion = exercise.tutor_motion()
     form = LandmarksForm(
         request.POST, n_frames=motion.frames.shape[0], joint_names=tuple(motion.skeleton.names)
     )

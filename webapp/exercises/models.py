@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 import uuid
+from typing import TYPE_CHECKING
 
-from django.db import models
+from django.db import models, transaction
+from django.db.models import Max
 
 from webapp.accounts.models import Clinic
+
+if TYPE_CHECKING:
+    from analysis.bvh import Motion
 
 
 class Exercise(models.Model):
@@ -45,12 +50,39 @@ class Exercise(models.Model):
     def __str__(self) -> str:
         return self.name
 
+    def tutor_motion(self) -> Motion:
+        """The parsed tutor recording (read from storage once per instance and tutor file).
+
+        Raises what `analysis.bvh.read` and the storage raise (BVHError, OSError).
+        """
+        # Imported here: the numerical core loads when a tutor is read, not at Django start.
+        from analysis.bvh import read
+
+        cached = self.__dict__.get("_tutor_motion")
+        if cached is None or cached[0] != self.tutor_file.name:
+            with self.tutor_file.open("rb") as handle:
+                cached = (self.tutor_file.name, read(handle.read()))
+            self.__dict__["_tutor_motion"] = cached
+        return cached[1]
+
 
 class ModelStatus(models.TextChoices):
     QUEUED = "queued", "Queued"
     RUNNING = "running", "Building"
     READY = "ready", "Ready"
     FAILED = "failed", "Failed"
+
+
+class ExerciseModelManager(models.Manager["ExerciseModel"]):
+    def create_next_version(self, exercise: Exercise, **fields) -> ExerciseModel:
+        """A new row numbered one above the exercise's latest version (1 for the first).
+
+        Takes a lock on the exercise row, so two builds never get the same number.
+        """
+        with transaction.atomic():
+            locked = Exercise.objects.select_for_update().get(pk=exercise.pk)
+            latest = self.filter(exercise=locked).aggregate(v=Max("version"))["v"] or 0
+            return self.create(exercise=locked, version=latest + 1, **fields)
 
 
 class ExerciseModel(models.Model):
@@ -69,6 +101,8 @@ class ExerciseModel(models.Model):
     error = models.TextField(blank=True)
     created_at = models.DateTimeField(auto_now_add=True)
     finished_at = models.DateTimeField(null=True, blank=True)
+
+    objects = ExerciseModelManager()
 
     class Meta:
         ordering = ["-version"]

@@ -34,7 +34,7 @@ POINT_VALUES = {
 }
 POINT_FIELDS = (
     "pk",
-    "score",  # the run's score column, a copy of summary["score"]
+    "score",  # the run's score column, a copy of the summary's score
     "recording_id",
     "recording__exercise_id",
     "recording__exercise__name",

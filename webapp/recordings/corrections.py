@@ -38,7 +38,7 @@ def check_landmarks(run: AnalysisRun, data: Any) -> tuple[list[int], list[int]]:
         raise ValidationError({"landmarks": "Give {'frames': [...], 'types': [...]}."})
     frames = _ints(data.get("frames"), "landmarks")
     types = _ints(data.get("types"), "landmarks")
-    n_frames = run.recording.n_frames or run.summary.get("frames", 0)
+    n_frames = run.recording.n_frames or (run.result.frames if run.result else 0)
     if len(frames) != len(types) or len(frames) < 2:
         raise ValidationError({"landmarks": "Give as many types as frames, at least two."})
     if frames != sorted(frames) or any(not 0 <= f < n_frames for f in frames):
@@ -49,7 +49,8 @@ def check_landmarks(run: AnalysisRun, data: Any) -> tuple[list[int], list[int]]:
 
 
 def check_levels(run: AnalysisRun, data: Any) -> list[tuple[int, str, int]]:
-    joints = {j for item in run.summary.get("assessment", []) for j in item.get("levels", {})}
+    assessment = run.result.assessment if run.result else ()
+    joints = {joint for item in assessment for joint in item.levels}
     if not isinstance(data, list):
         raise ValidationError({"levels": "Give a list of {'frame', 'joint', 'level'}."})
     out = []
@@ -68,7 +69,7 @@ def check_levels(run: AnalysisRun, data: Any) -> list[tuple[int, str, int]]:
 
 
 def check_repetitions(run: AnalysisRun, data: Any) -> list[tuple[int, bool]]:
-    count = len(run.summary.get("repetitions", []))
+    count = run.result.repetition_count if run.result else 0
     if not isinstance(data, list):
         raise ValidationError({"repetitions": "Give a list of {'index', 'passed'}."})
     out = []

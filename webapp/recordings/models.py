@@ -12,12 +12,16 @@ checks it on every read and marks the recording damaged on a mismatch.
 from __future__ import annotations
 
 import uuid
+from typing import TYPE_CHECKING
 
 from django.conf import settings
 from django.db import models
 from django.utils import timezone
 
 from webapp.accounts.models import Clinic
+
+if TYPE_CHECKING:
+    from analysis.pipeline.results import AnalysisSummary
 
 
 class LiveRecordingManager(models.Manager):
@@ -74,6 +78,18 @@ class Recording(models.Model):
             models.Index(fields=["patient", "-uploaded_at"], name="recording_patient_newest"),
         ]
 
+    def latest_succeeded_run(self) -> AnalysisRun | None:
+        """The newest SUCCEEDED run: the result the pages, reports, playback and corrections use.
+
+        A run only succeeds once its arrays file is stored, so no condition on the file: readers
+        of the arrays handle a missing one (as for the file-less runs of the scale generator).
+        With `runs` prefetched (list pages) it reads them instead of querying.
+        """
+        if "runs" in getattr(self, "_prefetched_objects_cache", {}):
+            succeeded = [r for r in self.runs.all() if r.status == RunStatus.SUCCEEDED]
+            return max(succeeded, key=lambda r: r.created_at, default=None)
+        return self.runs.filter(status=RunStatus.SUCCEEDED).order_by("-created_at").first()
+
 
 class RunStatus(models.TextChoices):
     QUEUED = "queued", "Queued"
@@ -83,13 +99,14 @@ class RunStatus(models.TextChoices):
 
 
 def summary_score(summary: dict | None) -> float | None:
-    """The recording score (0–100) a run's summary holds, if any."""
+    """The recording score (0–100) a run's stored summary holds, if any (the `score` column's
+    source, tolerant of malformed rows; readers use `AnalysisRun.result`)."""
     score = (summary or {}).get("score")
     return float(score) if isinstance(score, int | float) else None
 
 
 class AnalysisRunQuerySet(models.QuerySet):
-    """Keeps the `score` column equal to `summary["score"]` on bulk writes too."""
+    """Keeps the `score` column equal to the summary's score on bulk writes too."""
 
     def update(self, **fields):
         if "summary" in fields and "score" not in fields:
@@ -128,8 +145,9 @@ class AnalysisRun(models.Model):
     finished_at = models.DateTimeField(null=True, blank=True)
     user_error = models.TextField(blank=True)
     developer_error = models.TextField(blank=True)
+    # The `analyse --json` object as stored (served as-is by the API); read it through `result`.
     summary = models.JSONField(default=dict, blank=True)
-    # A copy of summary["score"]: queries over many runs (score trends on the dashboard) read
+    # A copy of the summary's score: queries over many runs (score trends on the dashboard) read
     # this small column instead of every run's 10–20 kB summary.
     score = models.FloatField(null=True, blank=True)
     arrays = models.FileField(upload_to="runs/%Y/%m/", blank=True)
@@ -152,39 +170,61 @@ class AnalysisRun(models.Model):
             kwargs["update_fields"] = {*fields, "score"}
         super().save(*args, **kwargs)
 
+    @property
+    def result(self) -> AnalysisSummary | None:
+        """The stored summary as the pipeline's typed result, None while there is none.
 
-class LandmarkCorrection(models.Model):
-    """A therapist's corrected key poses for one run: training data for the next model."""
+        The one reader of `summary`: pages, API, reports and workers read attributes of this.
+        Parsed once per instance, again only when `summary` is replaced (refresh, new value).
+        """
+        # Imported here: the numerical core loads when a result is read, not at Django start.
+        from analysis.pipeline.results import AnalysisSummary
 
-    run = models.ForeignKey(AnalysisRun, on_delete=models.CASCADE, related_name="landmark_fixes")
-    frames = models.JSONField()
-    types = models.JSONField()
+        if not self.summary:
+            return None
+        cached = self.__dict__.get("_result")
+        if cached is None or cached[0] is not self.summary:
+            cached = (self.summary, AnalysisSummary.from_json(self.summary))
+            self.__dict__["_result"] = cached
+        return cached[1]
+
+
+class Correction(models.Model):
+    """What every therapist correction of a run has: training data for the next model, marked
+    with the model version that used it."""
+
     author = models.ForeignKey(settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True)
     created_at = models.DateTimeField(auto_now_add=True)
     used_in_model = models.ForeignKey(
         "exercises.ExerciseModel", on_delete=models.SET_NULL, null=True, blank=True
     )
 
+    class Meta:
+        abstract = True
 
-class AssessmentCorrection(models.Model):
+
+class LandmarkCorrection(Correction):
+    """A therapist's corrected key poses for one run."""
+
+    run = models.ForeignKey(AnalysisRun, on_delete=models.CASCADE, related_name="landmark_fixes")
+    frames = models.JSONField()
+    types = models.JSONField()
+
+
+class AssessmentCorrection(Correction):
     """A therapist's corrected level for one joint at one key pose of a run."""
 
     run = models.ForeignKey(AnalysisRun, on_delete=models.CASCADE, related_name="assessment_fixes")
     frame = models.PositiveIntegerField()
     joint = models.CharField(max_length=100)
     level = models.PositiveSmallIntegerField()
-    author = models.ForeignKey(settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True)
-    created_at = models.DateTimeField(auto_now_add=True)
-    used_in_model = models.ForeignKey(
-        "exercises.ExerciseModel", on_delete=models.SET_NULL, null=True, blank=True
-    )
 
 
 class RepetitionLabel(models.Model):
     """A therapist's pass/fail verdict on one repetition of a run: data for the 001 threshold."""
 
     run = models.ForeignKey(AnalysisRun, on_delete=models.CASCADE, related_name="repetition_labels")
-    index = models.PositiveIntegerField()  # position in the run's summary["repetitions"]
+    index = models.PositiveIntegerField()  # position in the run's `result.repetitions`
     passed = models.BooleanField()
     author = models.ForeignKey(settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True)
     created_at = models.DateTimeField(auto_now_add=True)

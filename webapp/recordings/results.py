@@ -9,27 +9,39 @@ from __future__ import annotations
 
 from typing import Any
 
+from analysis.pipeline import AnalysisSummary
+from analysis.pipeline.results import assessment_to_json
 from webapp.accounts.models import User
 from webapp.recordings import similar
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 
-METRICS = ("score", "repetition_count", "tempo", "range_of_motion", "frames", "fps", "mirrored")
 
-
-def named_assessment(summary: dict[str, Any], names: dict[str, str]) -> list[dict[str, Any]]:
+def named_assessment(result: AnalysisSummary, names: dict[str, str]) -> list[dict[str, Any]]:
     return [
-        {**item, "type_name": names.get(str(item.get("type")), f"pose {item.get('type')}")}
-        for item in summary.get("assessment", [])
+        {**assessment_to_json(item), "type_name": names.get(str(item.type), f"pose {item.type}")}
+        for item in result.assessment
     ]
 
 
-def with_verdicts(repetitions: list[dict[str, Any]], recording: Recording) -> list[dict[str, Any]]:
+def with_verdicts(result: AnalysisSummary, recording: Recording) -> list[dict[str, Any]]:
     """Each repetition with `passed` by the exercise's 001 threshold (None until one is fitted)."""
     threshold = recording.exercise.pass_threshold if recording.exercise else None
     return [
-        {**rep, "passed": None if threshold is None else rep.get("score", 0.0) >= threshold}
-        for rep in repetitions
+        {**rep.to_json(), "passed": None if threshold is None else rep.score >= threshold}
+        for rep in result.repetitions
     ]
+
+
+def metrics(result: AnalysisSummary) -> dict[str, Any]:
+    return {
+        "score": result.score,
+        "repetition_count": result.repetition_count,
+        "tempo": result.tempo,
+        "range_of_motion": dict(result.range_of_motion),
+        "frames": result.frames,
+        "fps": result.fps,
+        "mirrored": result.mirrored,
+    }
 
 
 def result_data(recording: Recording, run: AnalysisRun | None, user: User) -> dict[str, Any]:
@@ -41,18 +53,18 @@ def result_data(recording: Recording, run: AnalysisRun | None, user: User) -> di
     }
     if run is None or run.status != RunStatus.SUCCEEDED:
         return body
-    summary = run.summary or {}
+    result = run.result or AnalysisSummary.from_json({})
     names = recording.exercise.landmark_type_names if recording.exercise else {}
     body.update(
         model_version=run.model.version if run.model_id else None,
         code_version=run.code_version,
-        repetitions=with_verdicts(summary.get("repetitions", []), recording),
+        repetitions=with_verdicts(result, recording),
         pass_threshold=recording.exercise.pass_threshold if recording.exercise else None,
-        landmarks=summary.get("landmarks", []),
-        assessment=named_assessment(summary, names),
-        feedback=summary.get("feedback", []),
-        metrics={key: summary.get(key) for key in METRICS},
-        gamma=summary.get("gamma", {}),
+        landmarks=[mark.to_json() for mark in result.landmarks],
+        assessment=named_assessment(result, names),
+        feedback=[comment.to_dict() for comment in result.feedback],
+        metrics=metrics(result),
+        gamma=dict(result.gamma),
         similar=similar.most_similar(recording, user),
     )
     return body

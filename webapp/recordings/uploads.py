@@ -19,7 +19,7 @@ from django.db import transaction
 from django.db.models import Q
 from django.utils import timezone
 
-from analysis.bvh import AnalysisInputError, BVHError, Motion, read
+from analysis.bvh import AnalysisInputError, BVHError, Motion, SkeletonMismatchError, map_onto, read
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
@@ -33,6 +33,7 @@ ACCEPTED_SUFFIXES = (".bvh", ".bvh.gz")
 # is 3.7 M values, 33 MB of text): they bound one upload's memory (~0.3 GB) and time (~1 s).
 MAX_DECOMPRESSED_BYTES = 96 << 20
 MAX_FRAME_VALUES = 8_000_000
+CHECK_FRAMES = 60  # frames the skeleton check retargets
 
 
 @dataclass(frozen=True)
@@ -41,6 +42,16 @@ class ParsedUpload:
     checksum: str
     motion: Motion
     original_name: str
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What the reader bent to open the file, in plain words, for the upload page."""
+        return tuple(upload_notice(w) for w in self.motion.warnings)
+
+
+def upload_notice(warning: str) -> str:
+    """A reader warning as a sentence for the person uploading."""
+    return f"The file was read although it bends the BVH format ({warning})."
 
 
 def read_upload(upload: UploadedFile) -> bytes:
@@ -76,15 +87,14 @@ def parse_upload(upload: UploadedFile) -> ParsedUpload:
 
 
 def check_skeleton(motion: Motion, exercise: Exercise) -> None:
-    """The recording must carry the joints of the exercise's tutor (same rig)."""
-    with exercise.tutor_file.open("rb") as handle:
-        tutor = read(handle.read())
-    missing = sorted(set(tutor.skeleton.names) - set(motion.skeleton.names))
-    if missing:
-        shown = ", ".join(missing[:5]) + (" …" if len(missing) > 5 else "")
-        raise ValidationError(
-            f"The recording's skeleton does not match the exercise's: missing joints {shown}."
-        )
+    """The recording must map onto the exercise tutor's skeleton: the same rig, or another rig
+    whose body parts are recognised (`analysis.bvh.map_onto`, as the analysis itself does; a few
+    frames suffice to check, the analysis maps them all)."""
+    tutor = exercise.tutor_motion()
+    try:
+        map_onto(motion.with_frames(motion.frames[:CHECK_FRAMES]), tutor.skeleton)
+    except SkeletonMismatchError as error:
+        raise ValidationError(str(error)) from error
 
 
 def check_not_duplicate(patient: Patient, checksum: str) -> None:

@@ -145,17 +145,13 @@ def confirm(request: HttpRequest, pk) -> HttpResponse:
     return render(request, "recordings/confirm.html", context, status=status)
 
 
-def succeeded_run(recording) -> AnalysisRun | None:
-    return recording.runs.filter(status="succeeded").first()
-
-
 @never_cache
 @login_required
 @require_staff
 def corrections(request: HttpRequest, pk) -> JsonResponse:
     """GET the therapist corrections of the latest analysis; POST (JSON) adds corrections."""
     recording = get_recording_for_user(request, pk)
-    run = succeeded_run(recording)
+    run = recording.latest_succeeded_run()
     if request.method == "POST":
         if run is None:
             return JsonResponse({"detail": "The recording has no finished analysis."}, status=400)

@@ -17,7 +17,7 @@ def fmt(value: Any, digits: int = 0) -> str:
     return "–" if value is None else f"{float(value):.{digits}f}"
 
 
-def key_poses(run, summary: dict) -> tuple[list, list[int]]:
+def key_poses(run) -> tuple[list, list[int]]:
     try:
         arrays = playback.load_arrays(run)
     except (OSError, ValueError, KeyError):
@@ -25,15 +25,15 @@ def key_poses(run, summary: dict) -> tuple[list, list[int]]:
     positions = arrays["patient_positions"]
     kinds = playback.type_names(run)
     poses = []
-    for item in (summary.get("landmarks") or [])[:MAX_POSES]:
-        frame = min(int(item["frame"]), positions.shape[0] - 1)
-        name = kinds.get(str(item["type"]), f"pose {item['type']}")
+    for mark in run.result.landmarks[:MAX_POSES]:
+        frame = min(mark.frame, positions.shape[0] - 1)
+        name = kinds.get(str(mark.type), f"pose {mark.type}")
         poses.append((f"{name} · frame {frame}", positions[frame]))
     return poses, [int(p) for p in arrays["parents"]]
 
 
 def recording_content(recording) -> dict[str, Any]:
-    run = playback.latest_succeeded(recording)
+    run = recording.latest_succeeded_run()
     exercise = recording.exercise.name if recording.exercise else "no exercise"
     content: dict[str, Any] = {
         "title": f"Recording report · {recording.patient.display_name}",
@@ -43,23 +43,22 @@ def recording_content(recording) -> dict[str, Any]:
             f"Recorded {recording.uploaded_at:%d %b %Y %H:%M} · {recording.n_frames} frames at "
             f"{recording.fps:.0f} fps · report made {timezone.now():%d %b %Y %H:%M}",
         ],
-        "analysed": run is not None,
+        "analysed": run is not None and run.result is not None,
     }
-    if run is None:
+    if not content["analysed"]:
         return content
-    summary = run.summary or {}
-    content["score"] = fmt(summary.get("score"))
+    result = run.result
+    content["score"] = fmt(result.score)
     content["repetitions"] = [
-        [i + 1, f"{r.get('start')}–{r.get('end')}", fmt(r.get("score")), r.get("guidance") or ""]
-        for i, r in enumerate(summary.get("repetitions", []))
+        [i + 1, f"{r.start}–{r.end}", fmt(r.score), ", ".join(g.type for g in r.guidance)]
+        for i, r in enumerate(result.repetitions)
     ]
-    content["feedback"] = [item.get("text", "") for item in summary.get("feedback", [])]
-    gamma = summary.get("gamma") or {}
+    content["feedback"] = [comment.text for comment in result.feedback]
     content["rom"] = [
-        [joint, fmt(value, 1), fmt(gamma.get(joint), 2)]
-        for joint, value in (summary.get("range_of_motion") or {}).items()
+        [joint, fmt(value, 1), fmt(result.gamma.get(joint), 2)]
+        for joint, value in result.range_of_motion.items()
     ]
-    content["poses"], content["parents"] = key_poses(run, summary)
+    content["poses"], content["parents"] = key_poses(run)
     return content
 
 

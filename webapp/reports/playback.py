@@ -7,14 +7,14 @@ Skeletons the run does not have (older runs, or before the lead adds them) are l
 
 from __future__ import annotations
 
-import gzip
-import io
-import re
 from typing import Any
 
 import numpy as np
 
-from webapp.recordings.models import AnalysisRun, RunStatus
+from analysis.kinematics.forward_kinematics import segment_angles
+from analysis.pipeline import AnalysisSummary
+from analysis.pipeline.results import assessment_to_json
+from webapp.recordings.models import AnalysisRun
 
 SKELETONS = (
     ("patient_positions", "patient", "Patient"),
@@ -23,10 +23,6 @@ SKELETONS = (
     ("tutor_adjusted_positions", "tutor_adjusted", "Tutor adjusted"),
 )
 MAX_CHART_POINTS = 600  # long series are downsampled for display
-
-
-def latest_succeeded(recording) -> AnalysisRun | None:
-    return recording.runs.filter(status=RunStatus.SUCCEEDED).exclude(arrays="").first()
 
 
 def load_arrays(run: AnalysisRun) -> dict[str, np.ndarray]:
@@ -51,14 +47,9 @@ def tutor_joint_names(run: AnalysisRun) -> list[str]:
     if exercise is None or not exercise.tutor_file:
         return []
     try:
-        with exercise.tutor_file.open("rb") as handle:
-            head = handle.read(1 << 20)
-        if head[:2] == b"\x1f\x8b":
-            head = gzip.GzipFile(fileobj=io.BytesIO(head)).read1(1 << 20)
-    except (OSError, EOFError):
+        return list(exercise.tutor_motion().skeleton.names)
+    except (OSError, EOFError, ValueError):  # unreadable or missing: no names (BVHError too)
         return []
-    hierarchy = head.decode("utf-8", "replace").split("MOTION", 1)[0]
-    return re.findall(r"(?:ROOT|JOINT)\s+(\S+)", hierarchy)
 
 
 def joint_names(run: AnalysisRun, arrays: dict[str, np.ndarray], n_joints: int) -> list[str]:
@@ -74,23 +65,20 @@ def joint_angles(positions: np.ndarray, parents: np.ndarray, joint: int) -> np.n
     parent = int(parents[joint])
     if parent < 0 or children.size == 0:
         return None
-    a = positions[:, parent] - positions[:, joint]
-    b = positions[:, children[0]] - positions[:, joint]
-    cos = np.einsum("fk,fk->f", a, b) / (
-        np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1) + 1e-9
-    )
-    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    return segment_angles(positions, [(parent, joint, int(children[0]))])[:, 0]
 
 
-def chart_joints(names: list[str], parents: np.ndarray, summary: dict[str, Any]) -> list[int]:
-    wanted = set(summary.get("range_of_motion") or {}) | set(summary.get("gamma") or {})
+def chart_joints(names: list[str], parents: np.ndarray, result: AnalysisSummary) -> list[int]:
+    wanted = set(result.range_of_motion) | set(result.gamma)
     chosen = [j for j, name in enumerate(names) if name in wanted]
     if not chosen:  # no names to match: the joints with both a parent and a child
         chosen = [j for j in range(len(parents)) if parents[j] >= 0 and (parents == j).any()][:4]
     return chosen[:8]
 
 
-def angle_series(arrays: dict[str, np.ndarray], names: list[str], summary: dict) -> dict:
+def angle_series(
+    arrays: dict[str, np.ndarray], names: list[str], result: AnalysisSummary
+) -> dict[str, Any]:
     parents = arrays["parents"].astype(int)
     n_frames = arrays["patient_positions"].shape[0]
     step = max(1, int(np.ceil(n_frames / MAX_CHART_POINTS)))
@@ -101,7 +89,7 @@ def angle_series(arrays: dict[str, np.ndarray], names: list[str], summary: dict)
     series = []
     for skeleton in shown:
         key = present[skeleton]
-        for joint in chart_joints(names, parents, summary):
+        for joint in chart_joints(names, parents, result):
             values = joint_angles(arrays[key][frames].astype(np.float64), parents, joint)
             if values is not None:
                 series.append(
@@ -121,7 +109,7 @@ def type_names(run: AnalysisRun) -> dict[str, str]:
 
 
 def description(run: AnalysisRun, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
-    summary = run.summary or {}
+    result = run.result or AnalysisSummary.from_json({})
     patient = arrays["patient_positions"]
     names = joint_names(run, arrays, patient.shape[1])
     kinds = type_names(run)
@@ -135,15 +123,15 @@ def description(run: AnalysisRun, arrays: dict[str, np.ndarray]) -> dict[str, An
         "run": str(run.pk),
         "frames": int(patient.shape[0]),
         "joints": int(patient.shape[1]),
-        "fps": float(summary.get("fps") or run.recording.fps or 30.0),
+        "fps": float(result.fps or run.recording.fps or 30.0),
         "names": names,
         "parents": [int(p) for p in arrays["parents"]],
         "skeletons": [{"key": k, "label": label} for _, k, label in skeleton_keys(arrays)],
         "layout": "float32 little-endian [skeleton][frame][joint][xyz]",
         "landmarks": landmarks,
-        "repetitions": summary.get("repetitions", []),
-        "feedback": summary.get("feedback", []),
-        "assessment": summary.get("assessment", []),
-        "score": summary.get("score"),
-        "angles": angle_series(arrays, names, summary),
+        "repetitions": [rep.to_json() for rep in result.repetitions],
+        "feedback": [comment.to_dict() for comment in result.feedback],
+        "assessment": [assessment_to_json(item) for item in result.assessment],
+        "score": result.score if run.result else None,
+        "angles": angle_series(arrays, names, result),
     }

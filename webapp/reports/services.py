@@ -12,11 +12,11 @@ from django.core.files.storage import default_storage
 from django.db import transaction
 
 from webapp.patients.progress import patient_progress
-from webapp.reports import playback
+from workers.tasks import make_report
 
 
 def recording_report_name(recording) -> str:
-    run = playback.latest_succeeded(recording)
+    run = recording.latest_succeeded_run()
     return f"reports/recording-{recording.pk}-{run.pk if run else 'none'}.pdf"
 
 
@@ -28,8 +28,6 @@ def progress_report_name(patient, since, until) -> str:
 
 def request_report(kind: str, object_id: str, name: str, since=None, until=None) -> bool:
     """Enqueue the report unless it is stored; True when it is ready now."""
-    from webapp.reports.tasks import make_report
-
     if default_storage.exists(name):
         return True
     args = [kind, str(object_id), name, since and since.isoformat(), until and until.isoformat()]

@@ -19,7 +19,7 @@ NOT_READY = "This recording has no playback data yet (the analysis has not succe
 
 def playback_or_none(request: HttpRequest, pk):
     recording = get_recording_for_user(request, pk)  # playback data is patient data: audited
-    run = playback.latest_succeeded(recording)
+    run = recording.latest_succeeded_run()
     if run is None:
         return None, None
     try:

@@ -127,7 +127,7 @@ function charts(playback) {
   Plotly.newPlot(chart, traces, layout, { displaylogo: false, responsive: true });
   chart.on("plotly_click", (e) => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(e.points[0].x * meta.fps); });
   const reps = meta.repetitions;
-  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => r.guidance || ""), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 30, l: 40 }, yaxis: { range: [0, 100], title: "score" } }, { displaylogo: false, responsive: true });
+  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => (r.guidance || []).map((g) => g.type).join(", ")), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 30, l: 40 }, yaxis: { range: [0, 100], title: "score" } }, { displaylogo: false, responsive: true });
   // The time cursor is a positioned overlay, not a Plotly shape: relayout is too slow to run
   // at the animation rate.
   const cursor = document.createElement("div");

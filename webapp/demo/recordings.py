@@ -1,9 +1,9 @@
 """The demo clinic's analysed recordings: UI-PRMD sessions analysed in this process at load time.
 
-Each exercise's model is built once (about a second each); each recording is stored with one
-analysis run that is analysed directly, without the task queue, so a fresh `make run` shows
-results even before a worker is started. Recordings are matched by checksum: loading twice adds
-nothing.
+Each exercise's model is built once (about a second each). Each recording goes through the upload
+service like any upload (checks, storage, first run), and its run is analysed in this process
+(`analyse_now`), so a fresh `make run` shows results even before a worker is started. Recordings
+are matched by checksum: loading twice adds nothing.
 """
 
 from __future__ import annotations
@@ -13,15 +13,17 @@ import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
-from django.core.files.base import ContentFile
+from django.core.files.uploadedfile import SimpleUploadedFile
+from django.db.models import Max
 from django.utils import timezone
 
-from analysis.bvh import read
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
+from webapp.exercises.services import build_model_now
 from webapp.patients.models import Patient, Prescription
-from webapp.recordings.models import AnalysisRun, Recording
-from workers import analysis_task, exercise_models
+from webapp.recordings.models import Recording
+from webapp.recordings.services import analyse_now
+from webapp.recordings.uploads import parse_upload, store_recording
 
 
 @dataclass(frozen=True)
@@ -40,32 +42,14 @@ def ensure_recording(
     existing = Recording.objects.filter(patient=patient, checksum=checksum).first()
     if existing is not None:
         return existing
-    motion = read(content)
-    n_frames = motion.frames.shape[0]
-    recording = Recording(
-        clinic=patient.clinic,
-        patient=patient,
-        exercise=exercise,
-        checksum=checksum,
-        original_name=Path(spec.file).name,
-        size_bytes=len(content),
-        n_frames=n_frames,
-        n_joints=len(motion.skeleton.names),
-        fps=motion.fps,
-        duration_s=n_frames * motion.frame_time,
-        pain_score=spec.pain_score,
-        uploaded_by=user,
+    parsed = parse_upload(SimpleUploadedFile(Path(spec.file).name, content))
+    recording, run = store_recording(
+        parsed, patient=patient, exercise=exercise, user=user, pain_score=spec.pain_score
     )
-    recording.file.save(f"{recording.pk}.bvh.gz", ContentFile(content), save=False)
-    recording.save()
     when = timezone.now() - datetime.timedelta(days=spec.days_ago)
     Recording.objects.filter(pk=recording.pk).update(uploaded_at=when)
-    run = AnalysisRun.objects.create(recording=recording)
-    analysis_task.analyse_run(str(run.pk))
-    Patient.objects.filter(pk=patient.pk, last_activity_at__isnull=True).update(
-        last_activity_at=when
-    )
-    Patient.objects.filter(pk=patient.pk, last_activity_at__lt=when).update(last_activity_at=when)
+    if run is not None:
+        analyse_now(run)
     return recording
 
 
@@ -85,9 +69,12 @@ def load_recordings(
     user: User,
 ) -> None:
     for exercise in exercises.values():
-        exercise_models.active_model(exercise)  # builds version 1 the first time
+        build_model_now(exercise)  # builds version 1 the first time
     for patient, specs in plan.items():
         for spec in specs:
             exercise = exercises[spec.exercise]
             ensure_prescription(patient, exercise, weeks_ago=4)
             ensure_recording(root, patient, exercise, spec, user)
+        # The demo's history is in the past: the patient was last active at their newest upload.
+        newest = patient.recordings.aggregate(at=Max("uploaded_at"))["at"]
+        Patient.objects.filter(pk=patient.pk).update(last_activity_at=newest)

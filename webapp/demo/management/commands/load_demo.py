@@ -1,7 +1,7 @@
 from django.conf import settings
 from django.core.management.base import BaseCommand, CommandError
 
-from webapp.dashboard.demo import load_demo_clinic
+from webapp.demo.clinic import load_demo_clinic
 
 
 class Command(BaseCommand):

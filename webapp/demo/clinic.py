@@ -16,7 +16,7 @@ from django.core.files.base import ContentFile
 from django.db import transaction
 
 from webapp.accounts.models import Clinic, Role, User
-from webapp.dashboard.demo_recordings import DemoRecording, load_recordings
+from webapp.demo.recordings import DemoRecording, load_recordings
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 

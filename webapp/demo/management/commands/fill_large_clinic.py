@@ -22,8 +22,8 @@ from django.db import connection, models, transaction
 from django.utils import timezone
 
 from webapp.accounts.models import Clinic, Role, User
-from webapp.dashboard import large_clinic as gen
-from webapp.exercises.models import Exercise, ExerciseModel
+from webapp.demo import large_clinic as gen
+from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from webapp.patients.models import Patient, PerformanceLevel, Prescription
 from webapp.recordings.models import AnalysisRun, Recording
 
@@ -218,8 +218,8 @@ class Filler:
                 involved_joints=list(gen.JOINTS),
                 archived_at=self.now if suffix else None,  # not offered for new uploads
             )
-            model = ExerciseModel.objects.create(
-                exercise=exercise, version=1, status="ready", progress=100
+            model = ExerciseModel.objects.create_next_version(
+                exercise, status=ModelStatus.READY, progress=100
             )
             exercise.active_model = model
             exercise.save(update_fields=["active_model"])

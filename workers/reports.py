@@ -1,4 +1,4 @@
-"""The report task, registered with the `workers` Celery app."""
+"""Rendering a PDF report into storage (the web app asks for it, a worker makes it)."""
 
 from __future__ import annotations
 
@@ -7,14 +7,13 @@ from datetime import date
 from django.core.files.base import ContentFile
 from django.core.files.storage import default_storage
 
-from workers.celery import app
+from webapp.patients.models import Patient
+from webapp.recordings.models import Recording
+from webapp.reports import content, pdf
 
 
 def generate(kind: str, object_id: str, since: str | None, until: str | None) -> bytes:
-    from webapp.patients.models import Patient
-    from webapp.recordings.models import Recording
-    from webapp.reports import content, pdf
-
+    """The PDF of one recording (`kind` "recording") or of a patient's progress over a period."""
     if kind == "recording":
         recording = Recording.objects.select_related("patient", "exercise", "clinic").get(
             pk=object_id
@@ -28,11 +27,10 @@ def generate(kind: str, object_id: str, since: str | None, until: str | None) ->
     return pdf.progress_pdf(content.progress_content(patient, *period))
 
 
-@app.task(name="webapp.reports.tasks.make_report", autoretry_for=(OSError,), max_retries=3)
 def make_report(
     kind: str, object_id: str, name: str, since: str | None = None, until: str | None = None
 ) -> str:
-    """Render one PDF report into storage under `name` (idempotent: kept if already there)."""
+    """Store the report under `name` unless it is there already (idempotent); returns `name`."""
     if not default_storage.exists(name):
         stored = default_storage.save(name, ContentFile(generate(kind, object_id, since, until)))
         if stored != name:  # a concurrent twin saved first; keep one copy
