@@ -1,6 +1,7 @@
-"""BVH files in and out: reader, writer, errors, and the map from other rigs' joint names.
+"""BVH files in and out: reader, writer, errors, and mapping other rigs onto an exercise skeleton.
 
-Pipeline: the first stage reads the upload with `read` and maps its joints with `map_joints`.
+Pipeline: the first stage reads the upload with `read` and puts it on the exercise's skeleton with
+`map_onto` (same rig: unchanged; another rig: matched by body parts and retargeted).
 """
 
 from analysis.bvh.errors import (
@@ -10,6 +11,7 @@ from analysis.bvh.errors import (
     SkeletonMismatchError,
 )
 from analysis.bvh.io import Motion, Skeleton, dumps, read, write
+from analysis.bvh.retarget import map_onto
 from analysis.bvh.skeleton_map import map_joints, normalise_name
 
 __all__ = [
@@ -21,6 +23,7 @@ __all__ = [
     "SkeletonMismatchError",
     "dumps",
     "map_joints",
+    "map_onto",
     "normalise_name",
     "read",
     "write",

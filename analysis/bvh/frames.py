@@ -3,6 +3,10 @@
 The scanner converts numbers and checks the frame layout at the same time: every non-blank line
 must hold exactly one value per channel, and there must be as many lines as declared. It returns
 an error code with the offending line instead of raising, so the message is built in Python.
+
+More well-formed frame lines than the ``Frames:`` count declares are kept, with a warning, when the
+caller passes a ``warnings`` list (Blender and PyMO read every frame line whatever the count says;
+an exporter that wrote the count before the take ended leaves such files).
 """
 
 from __future__ import annotations
@@ -135,13 +139,37 @@ def describe_bad_token(text_line: str, n_channels: int) -> str:
     return "a value is not a well-formed number"
 
 
+def _count_frame_lines(data: bytes | memoryview) -> int:
+    return sum(1 for line in bytes(data).split(b"\n") if line.strip())
+
+
 def parse_frames(
-    data: bytes | memoryview, n_frames: int, n_channels: int, first_line: int
+    data: bytes | memoryview,
+    n_frames: int,
+    n_channels: int,
+    first_line: int,
+    *,
+    warnings: list[str] | None = None,
+    max_values: int | None = None,
 ) -> npt.NDArray[np.float64]:
-    """Parse the frame lines (bytes after the Frame Time line) into an (F, C) float64 array."""
+    """Parse the frame lines (bytes after the Frame Time line) into an (F, C) float64 array.
+
+    With ``warnings``, frame lines beyond the declared count are read too (up to ``max_values``
+    values) and a warning is appended; without it they are an error.
+    """
     buffer = np.frombuffer(data, dtype=np.uint8)
     out = np.empty((n_frames, n_channels), dtype=np.float64)
     code, line_offset, frames_read = scan(buffer, out, n_frames, n_channels)
+    if code == TOO_MANY_FRAMES and warnings is not None:
+        found = _count_frame_lines(data)
+        if max_values is None or found * n_channels <= max_values:
+            out = np.empty((found, n_channels), dtype=np.float64)
+            code, line_offset, frames_read = scan(buffer, out, found, n_channels)
+            if code == OK:
+                warnings.append(
+                    f"line {first_line - 2}: {n_frames} frames declared but {found} frame lines "
+                    f"found; all {found} were read"
+                )
     if code == OK:
         return out
     line = first_line + int(line_offset)

@@ -2,11 +2,17 @@
 
 The parser walks a token stream with an explicit stack, so a deeply nested (or maliciously deep)
 hierarchy ends in a clear `BVHError` instead of a recursion error.
+
+Three quirks that common readers (Blender, bvhio, PyMO) accept are read with a warning in
+`Hierarchy.warnings` instead of an error: a first joint declared with ``JOINT`` instead of
+``ROOT``; words after ``End Site`` on its line (``End Site LeftToe_End``); and a line inside a joint
+that starts with an unknown keyword (``JOINTTYPE ball``, ``ROTATIONORDER ZXY``), which is skipped.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 from analysis.bvh.errors import BVHError
@@ -16,6 +22,7 @@ _CANONICAL = {name.lower(): name for name in CHANNEL_NAMES}
 MAX_JOINTS = 1024
 MAX_DEPTH = 256
 _COUNTS = frozenset("0123456")
+_KEYWORD = re.compile(r"[A-Za-z_][A-Za-z0-9_.:-]*")
 
 
 @dataclass
@@ -36,6 +43,7 @@ class Hierarchy:
     joints: list[JointDraft] = field(default_factory=list)
     end_parents: list[int] = field(default_factory=list)
     end_offsets: list[tuple[float, float, float]] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
 
 class TokenStream:
@@ -64,6 +72,10 @@ class TokenStream:
         if token != literal:
             raise BVHError(f"expected '{literal}' but found '{token}'", line)
         return line
+
+    def starts_line(self) -> bool:
+        """Whether the token just read (at pos - 1) is the first on its line."""
+        return self.pos < 2 or self.tokens[self.pos - 2][1] != self.tokens[self.pos - 1][1]
 
     def rest_of_line(self, line: int) -> list[str]:
         words = []
@@ -128,6 +140,10 @@ def read_end_site(stream: TokenStream, tree: Hierarchy, parent: int, line: int) 
     site, _ = stream.next("'Site'")
     if site != "Site":
         raise BVHError(f"expected 'End Site' but found 'End {site}'", line)
+    stray = stream.rest_of_line(line)
+    if stray:
+        shown = " ".join(stray)[:40]
+        tree.warnings.append(f"line {line}: ignored '{shown}' after 'End Site'")
     stream.expect("{")
     keyword, key_line = stream.next("OFFSET")
     if keyword != "OFFSET":
@@ -159,7 +175,9 @@ def parse_hierarchy(lines: list[str], first_line: int) -> Hierarchy:
     stream = TokenStream(lines, first_line)
     tree = Hierarchy()
     token, line = stream.next("ROOT")
-    if token != "ROOT":
+    if token == "JOINT":
+        tree.warnings.append(f"line {line}: the skeleton starts with JOINT instead of ROOT")
+    elif token != "ROOT":
         raise BVHError(f"expected ROOT but found '{token}'", line)
     stack = [open_joint(stream, tree, -1, line)]
     while stack:
@@ -176,12 +194,30 @@ def parse_hierarchy(lines: list[str], first_line: int) -> Hierarchy:
         elif keyword == "}":
             check_joint_complete(joint, line)
             stack.pop()
-        elif keyword == "ROOT":
-            raise BVHError("a ROOT inside another joint (unbalanced braces?)", line)
         else:
-            raise BVHError(f"unexpected '{keyword}' in joint '{joint.name}'", line)
+            other_in_joint(stream, tree, joint, keyword, line)
     check_single_root(stream)
     return tree
+
+
+def other_in_joint(
+    stream: TokenStream, tree: Hierarchy, joint: JointDraft, keyword: str, line: int
+) -> None:
+    """A token inside a joint that is not OFFSET, CHANNELS, JOINT, End or '}'."""
+    if keyword == "ROOT":
+        raise BVHError("a ROOT inside another joint (unbalanced braces?)", line)
+    if _KEYWORD.fullmatch(keyword) and stream.starts_line():
+        skip_unknown_line(stream, tree, joint, keyword, line)
+        return
+    raise BVHError(f"unexpected '{keyword}' in joint '{joint.name}'", line)
+
+
+def skip_unknown_line(
+    stream: TokenStream, tree: Hierarchy, joint: JointDraft, keyword: str, line: int
+) -> None:
+    """Skip a line inside a joint that starts with a keyword BVH does not define."""
+    words = " ".join([keyword, *stream.rest_of_line(line)])[:40]
+    tree.warnings.append(f"line {line}: ignored the unknown line '{words}' in joint '{joint.name}'")
 
 
 def check_single_root(stream: TokenStream) -> None:

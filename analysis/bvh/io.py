@@ -5,6 +5,25 @@
 frame values as one (F, C) float64 array. Malformed input raises `BVHError` (a ``ValueError``)
 naming the line and the problem. The frame block is parsed by a compiled scanner; the hierarchy,
 a few kilobytes at most, by an iterative token walker.
+
+Files that common readers open but that bend the format load with ``Motion.warnings`` saying what
+was bent (the reader never warns about a clean file):
+
+- a first joint declared ``JOINT`` instead of ``ROOT``; words after ``End Site``; an unknown
+  keyword line inside a joint (skipped); see `analysis.bvh.header`;
+- more frame lines than ``Frames:`` declares: every well-formed line is kept (Blender and PyMO read
+  them all; a count written before the take ended is the usual cause);
+- position channels on joints other than the root. Two conventions exist: the values *replace*
+  the OFFSET (Bandai-Namco, MotionBuilder and most exporters writing 6 channels per joint: the
+  values equal the OFFSET when bones do not stretch) or are *added* to it (some MakeHuman/Blender
+  exports: the values stay near zero). `Motion.frames` always holds the replacing convention, the
+  one `analysis.kinematics` uses. The reader chooses per file: *added* when the values' mean
+  magnitude is under a quarter of their mean distance from the OFFSET and under half the OFFSET's
+  mean magnitude (values near zero, offsets clearly not), and then adds the OFFSET to those
+  columns; otherwise *replacing*, unchanged. Both give a warning. Where the OFFSETs are zero the
+  two conventions agree.
+
+Malformed input still raises `BVHError` with the line.
 """
 
 from __future__ import annotations
@@ -67,11 +86,15 @@ class Skeleton:
 
 @dataclass(frozen=True, eq=False)
 class Motion:
-    """A skeleton and its frames: ``frames`` (F, C) float64 in channel order, ``frame_time`` s."""
+    """A skeleton and its frames: ``frames`` (F, C) float64 in channel order, ``frame_time`` s.
+
+    ``warnings``: what the reader bent to open the file (plain sentences, empty for a clean file).
+    """
 
     skeleton: Skeleton
     frames: FloatArray
     frame_time: float
+    warnings: tuple[str, ...] = ()
 
     @property
     def n_frames(self) -> int:
@@ -87,7 +110,8 @@ class Motion:
 
     def with_frames(self, frames: FloatArray, frame_time: float | None = None) -> Motion:
         """The same skeleton with other frames (e.g. a slice, a resampled or adjusted copy)."""
-        return Motion(self.skeleton, frames, self.frame_time if frame_time is None else frame_time)
+        time = self.frame_time if frame_time is None else frame_time
+        return Motion(self.skeleton, frames, time, self.warnings)
 
 
 def _load_bytes(source: Source) -> bytes:
@@ -207,10 +231,52 @@ def _check_frame_size(n_frames: int, n_channels: int, max_values: int, line: int
         )
 
 
+def _non_root_position_columns(skeleton: Skeleton) -> list[tuple[int, int, int]]:
+    """(joint, axis, frame column) of every position channel on a joint other than the root."""
+    out = []
+    for joint, (start, channels) in enumerate(
+        zip(skeleton.channel_starts, skeleton.channels, strict=True)
+    ):
+        if skeleton.parents[joint] < 0:
+            continue
+        for k, channel in enumerate(channels):
+            if channel.endswith("position"):
+                out.append((joint, "XYZ".index(channel[0]), int(start) + k))
+    return out
+
+
+def _position_convention(skeleton: Skeleton, frames: FloatArray, warnings: list[str]) -> FloatArray:
+    """Frames whose non-root position channels replace the OFFSET (see the module docstring)."""
+    columns = _non_root_position_columns(skeleton)
+    if not columns or frames.shape[0] == 0:
+        return frames
+    n_joints = len({j for j, _, _ in columns})
+    offsets = np.array([skeleton.offsets[j, a] for j, a, _ in columns])
+    values = frames[:, [c for _, _, c in columns]]
+    size = float(np.mean(np.abs(offsets)))
+    as_replacing = float(np.mean(np.abs(values - offsets)))
+    as_added = float(np.mean(np.abs(values)))
+    if size > 1e-9 and as_added < 0.25 * as_replacing and as_added < 0.5 * size:
+        frames = frames.copy()
+        frames[:, [c for _, _, c in columns]] += offsets
+        warnings.append(
+            f"position channels on {n_joints} joints other than the root hold values near zero: "
+            "they were read as added to each joint's OFFSET"
+        )
+    else:
+        warnings.append(
+            f"position channels on {n_joints} joints other than the root were read as the "
+            "joint's place relative to its parent, replacing its OFFSET"
+        )
+    return frames
+
+
 def parse(data: bytes, *, max_values: int = MAX_VALUES) -> Motion:
     """Parse uncompressed BVH bytes; ``max_values`` caps frames × channels (memory: 8 B each)."""
     header_lines, header_line, motion_end, motion_line = _split_sections(data)
-    skeleton = _skeleton(parse_hierarchy(header_lines, header_line))
+    tree = parse_hierarchy(header_lines, header_line)
+    skeleton = _skeleton(tree)
+    warnings = list(tree.warnings)
     n_channels = skeleton.n_channels
     if n_channels == 0:
         raise BVHError("the skeleton declares no channels", header_line)
@@ -219,8 +285,17 @@ def parse(data: bytes, *, max_values: int = MAX_VALUES) -> Motion:
     if n_frames * n_channels > len(data) - motion_end:
         raise BVHError(f"{n_frames} frames declared but the file is far too short", data_line - 2)
     _check_frame_size(n_frames, n_channels, min(max_values, MAX_VALUES), data_line - 2)
-    frames = parse_frames(memoryview(data)[offset:], n_frames, n_channels, data_line)
-    return Motion(skeleton, frames, frame_time)
+    cap = min(max_values, MAX_VALUES)
+    frames = parse_frames(
+        memoryview(data)[offset:],
+        n_frames,
+        n_channels,
+        data_line,
+        warnings=warnings,
+        max_values=cap,
+    )
+    frames = _position_convention(skeleton, frames, warnings)
+    return Motion(skeleton, frames, frame_time, tuple(warnings))
 
 
 def read(

@@ -6,6 +6,10 @@ body joint goes by in common rigs (Kinect SDK, UI-PRMD, CMU, Mixamo, Bandai-Namc
 compared case- and punctuation-insensitively, after dropping a ``namespace:`` prefix. A recording
 maps onto a model when every joint the model needs is found either by its own name or through a
 row of the table; otherwise `SkeletonMismatchError` names the joints that are missing.
+
+This matches names only, for callers that have no skeleton. Recordings of other rigs are put on an
+exercise's skeleton by `analysis.bvh.map_onto` (`analysis.bvh.rigs` finds the body parts by names,
+chain and rest pose; `analysis.bvh.retarget` transfers the segment rotations).
 """
 
 from __future__ import annotations

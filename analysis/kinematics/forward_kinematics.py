@@ -14,7 +14,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from analysis.bvh import Motion, Skeleton
+from analysis.bvh.io import Motion, Skeleton
 from analysis.kinematics import quaternions as quat
 
 FloatArray = npt.NDArray[np.float64]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from analysis.bvh import Motion
+from analysis.bvh.io import Motion
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics.forward_kinematics import rotations
 

@@ -67,7 +67,7 @@ def test_skeleton_mismatch_is_400(api, world, exercise, settings):
     response = post(api, world.patient, exercise, mismatched(), "take.bvh")
     assert response.status_code == 400
     message = response.json()["file"][0]["message"]
-    assert "skeleton does not match" in message and "LeftFoot" in message
+    assert "skeleton does not match" in message and "left foot" in message
     assert_nothing_stored(settings)
 
 
