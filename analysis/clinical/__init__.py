@@ -1,0 +1,40 @@
+"""Clinical measures: anatomical joint angles in degrees, normal ranges, reachable workspace.
+
+Public API:
+
+- `angle_series(motion, method="orientation") -> dict[str, ndarray]`: degrees per frame for
+  each angle of `ANGLE_NAMES` the skeleton gives (``knee_flexion_left`` … ``trunk_flexion``,
+  ``trunk_lateral_flexion``; CONTRACTS.md ``clinical_angles``).
+- `angle_ranges(series, start=None, end=None) -> dict[str, AngleRange]`: min/max per angle over
+  a recording or a repetition (frames ``start..end`` inclusive).
+- `clinical_angles(motion) -> dict[str, AngleRange]`: both in one call, whole recording.
+- `Norm`, `NORMS`, `norm_for(name)`: normal adult active ranges (AAOS).
+- `Workspace`, `reachable_workspace(motion, start=None, end=None)`,
+  `workspace_from_points(points, side)`: reachable workspace of each hand (relative surface
+  area, total and per quadrant, and the hull for a 3D view).
+
+Conventions and sources: docs/sections/clinical.md. Numpy, scipy and trimesh only.
+"""
+
+from analysis.clinical.angles import ANGLE_NAMES, angle_ranges, angle_series, clinical_angles
+from analysis.clinical.norms import NORMS, Norm, norm_for
+from analysis.clinical.workspace import (
+    QUADRANTS,
+    Workspace,
+    reachable_workspace,
+    workspace_from_points,
+)
+
+__all__ = [
+    "ANGLE_NAMES",
+    "NORMS",
+    "QUADRANTS",
+    "Norm",
+    "Workspace",
+    "angle_ranges",
+    "angle_series",
+    "clinical_angles",
+    "norm_for",
+    "reachable_workspace",
+    "workspace_from_points",
+]

@@ -1,0 +1,101 @@
+"""Reachable workspace: known sphere caps (points and a posed arm), quadrants, degenerate paths."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from analysis.bvh import read
+from analysis.clinical import QUADRANTS, reachable_workspace, workspace_from_points
+from analysis.clinical.synthetic import posed, rot
+
+UI_PRMD = Path(__file__).resolve().parents[2] / "data" / "ui-prmd" / "sessions"
+
+
+def cap(axis: np.ndarray, half_angle: float, n_rings: int = 12, n_around: int = 90) -> np.ndarray:
+    """Unit directions filling a spherical cap (its rim densely) around ``axis``."""
+    axis = axis / np.linalg.norm(axis)
+    helper = np.array([0.0, 1.0, 0.0]) if abs(axis[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    u = np.cross(axis, helper)
+    u /= np.linalg.norm(u)
+    v = np.cross(axis, u)
+    polar = np.radians(np.linspace(0.0, half_angle, n_rings))[:, None]
+    around = np.linspace(0.0, 2 * np.pi, n_around, endpoint=False)[None, :]
+    points = (
+        np.cos(polar)[..., None] * axis
+        + (np.sin(polar) * np.cos(around))[..., None] * u
+        + (np.sin(polar) * np.sin(around))[..., None] * v
+    )
+    return points.reshape(-1, 3)
+
+
+def cap_share(half_angle: float) -> float:
+    """Area of a cap over the hemisphere's: 2π(1 − cos a) / 2π."""
+    return 1.0 - np.cos(np.radians(half_angle))
+
+
+@pytest.mark.parametrize("half_angle", [30.0, 60.0, 85.0])
+def test_cap_in_front_of_the_shoulder(half_angle):
+    reach = 0.9 * cap(np.array([1.0, 0.0, 0.0]), half_angle)  # the hand short of full reach
+    ws = workspace_from_points(reach, "right")
+    assert ws.relative_area == pytest.approx(cap_share(half_angle), rel=0.05)
+    # Centred on the anterior axis: the four quadrants share it equally.
+    for name in QUADRANTS:
+        assert ws.quadrants[name] == pytest.approx(ws.relative_area / 4, rel=0.05)
+    assert sum(ws.quadrants.values()) == pytest.approx(ws.relative_area, abs=1e-3)
+    assert np.allclose(np.linalg.norm(ws.vertices, axis=1), 1.0)
+    assert ws.faces.max() < len(ws.vertices)
+
+
+def test_cap_above_and_out_lands_in_the_upper_lateral_quadrant():
+    axis = np.array([1.0, 1.0, 1.0])  # forward, up and out
+    ws = workspace_from_points(cap(axis, 20.0), "left")
+    assert ws.relative_area == pytest.approx(cap_share(20.0), rel=0.05)
+    assert ws.quadrants["upper_lateral"] == pytest.approx(ws.relative_area, rel=1e-3)
+
+
+def test_only_the_frontal_hemisphere_counts():
+    ws = workspace_from_points(cap(np.array([0.0, 0.0, 1.0]), 40.0), "right")  # straight out
+    assert ws.relative_area == pytest.approx(cap_share(40.0) / 2, rel=0.05)
+
+
+def test_hand_path_of_a_posed_arm():
+    """The right arm (T-pose rest along −x) swept through a 45° cap around straight forward."""
+    directions = cap(np.array([0.0, 0.0, 1.0]), 45.0, n_rings=6, n_around=40)
+    rest = np.array([-1.0, 0.0, 0.0])
+    poses = []
+    for d in directions:
+        axis = np.cross(rest, d)
+        angle = np.degrees(np.arccos(np.clip(rest @ d, -1, 1)))
+        turn = rot("x", 0.0) if np.linalg.norm(axis) < 1e-9 else _about(axis, angle)
+        poses.append({"RightUpperArm": turn})
+    ws = reachable_workspace(posed(poses))
+    assert set(ws) == {"left", "right"}
+    assert ws["right"].relative_area == pytest.approx(cap_share(45.0), rel=0.05)
+    assert ws["right"].arm_length == pytest.approx(53.0)
+    assert ws["left"].relative_area == 0.0  # the left arm hangs still
+    one = reachable_workspace(posed(poses), start=0, end=0)["right"]
+    assert one.relative_area == 0.0
+
+
+def _about(axis: np.ndarray, degrees: float) -> np.ndarray:
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_rotvec(np.radians(degrees) * axis / np.linalg.norm(axis)).as_matrix()
+
+
+def test_degenerate_paths_have_no_area():
+    assert workspace_from_points(np.zeros((0, 3)), "left").relative_area == 0.0
+    flat = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.7, -0.7, 0.0], [np.nan, 0, 0]])
+    ws = workspace_from_points(flat, "left")
+    assert ws.relative_area == pytest.approx(0.0, abs=1e-6)
+    assert ws.to_json()["quadrants"] == ws.quadrants
+
+
+def test_ui_prmd_shoulder_abduction_covers_more_than_a_squat():
+    raise_arm = reachable_workspace(read(UI_PRMD / "m07_s01_correct.bvh.gz"))
+    squat = reachable_workspace(read(UI_PRMD / "m01_s01_correct.bvh.gz"))
+    assert max(w.relative_area for w in raise_arm.values()) > 0.1
+    assert max(w.relative_area for w in squat.values()) < 0.1

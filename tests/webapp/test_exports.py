@@ -1,0 +1,143 @@
+"""History exports: CSV rows per recording and the FHIR R4 Bundle (validated with fhir.resources),
+with the API's access rules (another clinic's patient: 404; anonymous: 401)."""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import io
+
+import pytest
+from django.urls import reverse
+from django.utils import timezone
+from fhir.resources.R4B.bundle import Bundle
+from rest_framework.test import APIClient
+
+from analysis.clinical import ANGLE_NAMES
+from analysis.pipeline.results import AnalysisSummary, AngleRange, RepetitionResult
+from tests.personas import make_exercise, make_recording
+from webapp.accounts.tokens import issue_token
+from webapp.audit.models import AuditEvent
+from webapp.recordings.models import AnalysisRun, Recording, RunStatus
+
+KNEE = AngleRange(2.5, 95.0)
+TRUNK = AngleRange(-1.0, 28.25)
+
+
+def summary(score: float, angles: dict[str, AngleRange], passed=(True, False, True)) -> dict:
+    reps = tuple(
+        RepetitionResult(start=10 * i, end=10 * i + 9, peak=10 * i + 5, score=score, passed=p)
+        for i, p in enumerate(passed)
+    )
+    result = AnalysisSummary(
+        frames=40, fps=30.0, landmarks=(), repetitions=reps, score=score, clinical_angles=angles
+    )
+    return result.to_json()
+
+
+def analysed(patient, exercise, data: dict, days_ago: int) -> Recording:
+    recording = make_recording(patient, exercise)
+    AnalysisRun.objects.filter(recording=recording).update(status=RunStatus.SUCCEEDED, summary=data)
+    when = timezone.now() - datetime.timedelta(days=days_ago)
+    Recording.objects.filter(pk=recording.pk).update(uploaded_at=when)
+    return recording
+
+
+@pytest.fixture
+def history(world):
+    squat = make_exercise(world.clinic)
+    old = summary(61.5, {})  # an older run: no clinical angles
+    old.pop("clinical_angles")
+    first = analysed(world.patient, squat, old, days_ago=9)
+    angles = {"knee_flexion_left": KNEE, "trunk_flexion": TRUNK}
+    second = analysed(world.patient, squat, summary(80.0, angles), days_ago=2)
+    make_recording(world.patient, squat)  # not analysed yet: not exported
+    return first, second
+
+
+def api(user) -> APIClient:
+    client = APIClient()
+    _, key = issue_token(user, "practice system")
+    client.credentials(HTTP_AUTHORIZATION=f"Token {key}")
+    return client
+
+
+def rows_of(response) -> list[dict[str, str]]:
+    return list(csv.DictReader(io.StringIO(response.content.decode())))
+
+
+def test_history_csv_one_row_per_analysed_recording(world, history):
+    url = reverse("api-patient-history-csv", kwargs={"pk": world.patient.pk})
+    response = api(world.therapist).get(url)
+    assert response.status_code == 200
+    assert response["Content-Type"].startswith("text/csv")
+    assert "attachment" in response["Content-Disposition"]
+    header = next(csv.reader(io.StringIO(response.content.decode())))
+    assert header[:5] == ["date", "exercise", "score", "repetitions", "passed"]
+    assert header[5:] == [f"{name}_range" for name in ANGLE_NAMES]
+    old, new = rows_of(response)
+    assert old["exercise"] == new["exercise"] == "Deep squat"
+    assert old["date"] < new["date"]
+    assert (float(old["score"]), old["repetitions"], old["passed"]) == (61.5, "3", "2")
+    assert all(old[f"{name}_range"] == "" for name in ANGLE_NAMES)  # older run: empty cells
+    assert float(new["knee_flexion_left_range"]) == KNEE.range == 92.5
+    assert float(new["trunk_flexion_range"]) == TRUNK.range
+    assert new["knee_flexion_right_range"] == ""
+    assert AuditEvent.objects.filter(action="export", patient_id=world.patient.pk).exists()
+
+
+def test_history_csv_for_a_patient_and_asking_for_csv(world, history):
+    url = reverse("api-patient-history-csv", kwargs={"pk": world.patient.pk})
+    client = APIClient()
+    client.force_authenticate(world.patient_user)
+    response = client.get(url, HTTP_ACCEPT="text/csv")
+    assert response.status_code == 200 and len(rows_of(response)) == 2
+
+
+def test_fhir_bundle_validates_and_holds_the_history(world, history):
+    url = reverse("api-patient-fhir", kwargs={"pk": world.patient.pk})
+    response = api(world.therapist).get(url)
+    assert response.status_code == 200
+    assert response["Content-Type"].startswith("application/fhir+json")
+    data = response.json()
+    bundle = Bundle.model_validate(data)  # raises on anything FHIR does not allow
+    assert bundle.type == "collection"
+    resources = [e["resource"] for e in data["entry"]]
+    patient = resources[0]
+    assert patient["resourceType"] == "Patient" and patient["id"] == str(world.patient.pk)
+    observations = resources[1:]
+    assert all(o["subject"]["reference"] == f"urn:uuid:{world.patient.pk}" for o in observations)
+    scores = [o for o in observations if o["code"]["coding"][0]["code"] == "session-score"]
+    assert [o["valueQuantity"]["value"] for o in scores] == [61.5, 80.0]
+    assert scores[0]["component"][0]["valueQuantity"]["value"] == 3
+    knee = next(o for o in observations if o["code"]["coding"][0]["code"] == "knee_flexion_left")
+    assert knee["valueRange"]["low"]["value"] == KNEE.min
+    assert knee["valueRange"]["high"] == {
+        "value": KNEE.max, "unit": "deg", "system": "http://unitsofmeasure.org", "code": "deg"
+    }  # fmt: skip
+    assert knee["component"][0]["valueQuantity"]["value"] == KNEE.range
+    assert len(observations) == 2 + 2  # two scores, two angle ranges (the old run has none)
+    assert len({o["id"] for o in observations}) == len(observations)
+    again = api(world.therapist).get(url).json()
+    assert [e["resource"]["id"] for e in again["entry"]] == [r["id"] for r in resources]
+
+
+@pytest.mark.parametrize("name", ["api-patient-history-csv", "api-patient-fhir"])
+def test_another_clinic_or_patient_gets_404_and_anonymous_401(world, history, name):
+    own = reverse(name, kwargs={"pk": world.patient.pk})
+    elsewhere = reverse(name, kwargs={"pk": world.outsider_patient.pk})
+    assert api(world.outsider).get(own).status_code == 404
+    assert api(world.therapist).get(elsewhere).status_code == 404
+    client = APIClient()
+    client.force_authenticate(world.other_patient_user)
+    assert client.get(own).status_code == 404
+    assert APIClient().get(own).status_code == 401
+
+
+def test_empty_history(world):
+    url = reverse("api-patient-fhir", kwargs={"pk": world.other_patient.pk})
+    data = api(world.therapist).get(url).json()
+    assert [e["resource"]["resourceType"] for e in data["entry"]] == ["Patient"]
+    Bundle.model_validate(data)
+    csv_url = reverse("api-patient-history-csv", kwargs={"pk": world.other_patient.pk})
+    assert rows_of(api(world.therapist).get(csv_url)) == []

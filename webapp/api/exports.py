@@ -1,0 +1,240 @@
+"""A patient's history for other systems: CSV (one row per recording) and a FHIR R4 Bundle.
+
+Both read each recording's newest succeeded run through `AnalysisRun.result` (the typed
+`AnalysisSummary`); recordings without one are left out, runs without clinical angles (older
+runs) have empty cells / no angle Observations. Access as every API view: another clinic's
+patient, or another patient's record, answers 404; each export is written to the audit log.
+
+FHIR: a ``collection`` Bundle with the Patient and, per recording, one Observation for the
+session score (with its repetitions as components) and one per measured angle range
+(``valueRange`` in degrees, UCUM ``deg``). No LOINC code for these measures was confirmed, so
+they use the local code system `LOCAL_SYSTEM` (codes: ``session-score``, ``repetitions``,
+``repetitions-passed``, ``span`` and the angle names of CONTRACTS.md, e.g.
+``knee_flexion_left``), documented in docs/sections/clinical.md.
+"""
+
+from __future__ import annotations
+
+import csv
+import uuid
+from typing import Any
+
+from django.conf import settings
+from django.http import HttpResponse
+from django.utils import timezone
+from django.utils.text import slugify
+from drf_spectacular.types import OpenApiTypes
+from drf_spectacular.utils import OpenApiResponse, extend_schema
+from rest_framework.renderers import BaseRenderer, JSONRenderer
+from rest_framework.request import Request
+from rest_framework.response import Response
+from rest_framework.views import APIView
+
+from analysis.clinical import ANGLE_NAMES
+from analysis.pipeline.results import AnalysisSummary
+from webapp.accounts.permissions import get_patient_for_user
+from webapp.audit import log
+from webapp.patients.models import Patient
+from webapp.recordings.models import Recording
+
+LOCAL_SYSTEM = getattr(settings, "FHIR_LOCAL_CODE_SYSTEM", "urn:physio-dashboard:measure")
+UCUM = "http://unitsofmeasure.org"
+CATEGORY = {
+    "coding": [
+        {
+            "system": "http://terminology.hl7.org/CodeSystem/observation-category",
+            "code": "exam",
+            "display": "Exam",
+        }
+    ]
+}
+CSV_COLUMNS = ["date", "exercise", "score", "repetitions", "passed"]
+ANGLE_COLUMNS = [f"{name}_range" for name in ANGLE_NAMES]
+
+
+def analysed_recordings(patient: Patient) -> list[tuple[Recording, AnalysisSummary]]:
+    """Each recording with a succeeded run and that run's result, oldest first."""
+    recordings = (
+        Recording.objects.filter(patient=patient)
+        .select_related("exercise")
+        .prefetch_related("runs")
+        .order_by("uploaded_at")
+    )
+    out = []
+    for recording in recordings:
+        run = recording.latest_succeeded_run()
+        result = run.result if run is not None else None
+        if result is not None:
+            out.append((recording, result))
+    return out
+
+
+def passed_count(result: AnalysisSummary) -> int | str:
+    """Repetitions that passed; empty when the result does not say (no ``passed`` attribute)."""
+    flags = [getattr(rep, "passed", None) for rep in result.repetitions]
+    known = [flag for flag in flags if flag is not None]
+    return sum(bool(flag) for flag in known) if known or not flags else ""
+
+
+def exercise_name(recording: Recording) -> str:
+    return recording.exercise.name if recording.exercise else ""
+
+
+def csv_row(recording: Recording, result: AnalysisSummary) -> list[Any]:
+    angles = result.clinical_angles
+    return [
+        recording.uploaded_at.isoformat(),
+        exercise_name(recording),
+        round(result.score, 2),
+        result.repetition_count,
+        passed_count(result),
+        *(angles[name].range if name in angles else "" for name in ANGLE_NAMES),
+    ]
+
+
+class CSVRenderer(BaseRenderer):
+    """Lets clients ask for ``text/csv``; error answers are then plain text."""
+
+    media_type = "text/csv"
+    format = "csv"
+    charset = "utf-8"
+
+    def render(self, data, accepted_media_type=None, renderer_context=None):
+        if isinstance(data, dict) and "detail" in data:
+            return str(data["detail"]).encode()
+        return str(data).encode()
+
+
+def audited_patient(request: Request, pk) -> Patient:
+    patient = get_patient_for_user(request, pk, audit=False)
+    log.record(request, "export", patient, patient_id=patient.pk)
+    return patient
+
+
+class PatientHistoryCSV(APIView):
+    """One row per analysed recording: date, exercise, score, repetitions, repetitions passed,
+    then each clinical angle's range in degrees (empty when the run did not measure it)."""
+
+    renderer_classes = [JSONRenderer, CSVRenderer]
+
+    @extend_schema(responses={(200, "text/csv"): OpenApiResponse(OpenApiTypes.STR)})
+    def get(self, request: Request, pk) -> HttpResponse:
+        patient = audited_patient(request, pk)
+        response = HttpResponse(content_type="text/csv; charset=utf-8")
+        filename = f"history-{slugify(patient.display_name) or 'patient'}.csv"
+        response["Content-Disposition"] = f'attachment; filename="{filename}"'
+        writer = csv.writer(response)
+        writer.writerow(CSV_COLUMNS + ANGLE_COLUMNS)
+        for recording, result in analysed_recordings(patient):
+            writer.writerow(csv_row(recording, result))
+        return response
+
+
+def local_code(code: str, display: str) -> dict[str, Any]:
+    return {"coding": [{"system": LOCAL_SYSTEM, "code": code, "display": display}], "text": display}
+
+
+def quantity(value: float, unit: str, code: str) -> dict[str, Any]:
+    return {"value": value, "unit": unit, "system": UCUM, "code": code}
+
+
+def entry(resource: dict[str, Any]) -> dict[str, Any]:
+    return {"fullUrl": f"urn:uuid:{resource['id']}", "resource": resource}
+
+
+def patient_resource(patient: Patient) -> dict[str, Any]:
+    resource: dict[str, Any] = {
+        "resourceType": "Patient",
+        "id": str(patient.pk),
+        "active": patient.archived_at is None,
+        "name": [{"text": patient.display_name}],
+    }
+    if patient.date_of_birth:
+        resource["birthDate"] = patient.date_of_birth.isoformat()
+    return resource
+
+
+def observation(patient: Patient, recording: Recording, key: str, **fields) -> dict[str, Any]:
+    """An Observation of one recording; its id is stable for (recording, key)."""
+    return {
+        "resourceType": "Observation",
+        "id": str(uuid.uuid5(recording.pk, key)),
+        "status": "final",
+        "category": [CATEGORY],
+        "subject": {"reference": f"urn:uuid:{patient.pk}"},
+        "effectiveDateTime": recording.uploaded_at.isoformat(),
+        **fields,
+    }
+
+
+def score_observation(patient: Patient, recording: Recording, result: AnalysisSummary):
+    components = [
+        {
+            "code": local_code("repetitions", "Repetitions"),
+            "valueQuantity": quantity(result.repetition_count, "repetitions", "1"),
+        }
+    ]
+    passed = passed_count(result)
+    if passed != "":
+        components.append(
+            {
+                "code": local_code("repetitions-passed", "Repetitions passed"),
+                "valueQuantity": quantity(float(passed), "repetitions", "1"),
+            }
+        )
+    name = exercise_name(recording) or "exercise"
+    return observation(
+        patient,
+        recording,
+        "session-score",
+        code=local_code("session-score", f"Exercise session score ({name}), 0-100"),
+        valueQuantity=quantity(round(result.score, 2), "score", "{score}"),
+        component=components,
+    )
+
+
+def angle_observations(patient: Patient, recording: Recording, result: AnalysisSummary):
+    for name in ANGLE_NAMES:
+        if name not in result.clinical_angles:
+            continue
+        span = result.clinical_angles[name]
+        yield observation(
+            patient,
+            recording,
+            name,
+            code=local_code(name, f"{name.replace('_', ' ').capitalize()}, range of motion"),
+            valueRange={
+                "low": quantity(span.min, "deg", "deg"),
+                "high": quantity(span.max, "deg", "deg"),
+            },
+            component=[
+                {
+                    "code": local_code("span", "Range (max - min)"),
+                    "valueQuantity": quantity(span.range, "deg", "deg"),
+                }
+            ],
+        )
+
+
+def patient_bundle(patient: Patient) -> dict[str, Any]:
+    """The FHIR R4 Bundle (type collection) of one patient's analysed history."""
+    entries = [entry(patient_resource(patient))]
+    for recording, result in analysed_recordings(patient):
+        entries.append(entry(score_observation(patient, recording, result)))
+        entries.extend(entry(o) for o in angle_observations(patient, recording, result))
+    return {
+        "resourceType": "Bundle",
+        "id": str(uuid.uuid4()),
+        "type": "collection",
+        "timestamp": timezone.now().isoformat(),
+        "entry": entries,
+    }
+
+
+class PatientFHIR(APIView):
+    """The patient and their session scores and angle ranges as a FHIR R4 Bundle (JSON)."""
+
+    @extend_schema(responses={(200, "application/fhir+json"): OpenApiResponse(OpenApiTypes.OBJECT)})
+    def get(self, request: Request, pk) -> Response:
+        patient = audited_patient(request, pk)
+        return Response(patient_bundle(patient), content_type="application/fhir+json")
