@@ -23,7 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from scipy import stats
 
 from analysis.dtw.frame_costs import paired_costs
 from analysis.kinematics import quaternions as quat
@@ -54,17 +53,36 @@ def displacement_vectors(rotations: npt.ArrayLike) -> FloatArray:
 
 def _correlations(A: FloatArray, B: FloatArray, method: str) -> FloatArray:
     """Correlation per column of A, B (K, c); both constant -> 1, one constant -> 0."""
-    out = np.empty(A.shape[1])
-    for c in range(A.shape[1]):
-        flat_a = np.ptp(A[:, c]) <= CONSTANT_TOL
-        flat_b = np.ptp(B[:, c]) <= CONSTANT_TOL
-        if flat_a or flat_b:
-            out[c] = 1.0 if flat_a and flat_b else 0.0
-        elif method == "kendall":
-            out[c] = stats.kendalltau(A[:, c], B[:, c]).statistic
-        else:
+    flat_a = np.ptp(A, axis=0) <= CONSTANT_TOL
+    flat_b = np.ptp(B, axis=0) <= CONSTANT_TOL
+    out = np.where(flat_a & flat_b, 1.0, 0.0)
+    varying = ~(flat_a | flat_b)
+    if not varying.any():
+        return out
+    if method == "kendall":
+        out[varying] = kendall_tau_b(A[:, varying], B[:, varying])
+    else:
+        for c in np.flatnonzero(varying):
             out[c] = np.corrcoef(A[:, c], B[:, c])[0, 1]
     return out
+
+
+def kendall_tau_b(A: FloatArray, B: FloatArray, block: int = 64) -> FloatArray:
+    """Kendall's tau-b of every column pair of A, B (K, c) at once (as scipy's ``kendalltau``,
+    ties included): Σ sgn(Δa)·sgn(Δb) over all pairs of rows, over the square root of the
+    products of the untied pair counts. Rows are taken ``block`` at a time to bound memory."""
+    K, c = A.shape
+    concordance = np.zeros(c)
+    untied_a = np.zeros(c)
+    untied_b = np.zeros(c)
+    for lo in range(0, K, block):
+        da = np.sign(A[lo : lo + block, None, :] - A[None, :, :])
+        db = np.sign(B[lo : lo + block, None, :] - B[None, :, :])
+        concordance += np.einsum("ijc,ijc->c", da, db)
+        untied_a += np.count_nonzero(da, axis=(0, 1))
+        untied_b += np.count_nonzero(db, axis=(0, 1))
+    # every unordered pair was counted twice (i, j) and (j, i): the factor cancels
+    return np.asarray(concordance / np.sqrt(np.maximum(untied_a * untied_b, 1e-300)))
 
 
 def kendall_tau_score(

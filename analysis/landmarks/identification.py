@@ -95,16 +95,29 @@ Labelled = tuple[Motion, npt.ArrayLike, npt.ArrayLike]  # recording, landmark fr
 
 
 @dataclass(frozen=True)
+class Identified:
+    """The classifier's candidate landmarks (eq 5.23) of one performance, with its signature
+    (F, k) and whether it was read mirrored (left↔right)."""
+
+    candidates: Candidates
+    signature: FloatArray
+    mirrored: bool
+
+
+@dataclass(frozen=True)
 class LandmarkResult:
     """Landmarks of one performance at each stage: ``candidates`` (identification, eq 5.23),
     ``refined`` (clustering + selection, eq 5.27), ``landmarks`` (after grammar typing and
-    relocation: what periodic sequence analysis receives), ``signature`` (F, k), ``mirrored``."""
+    relocation: what periodic sequence analysis receives), ``signature`` (F, k), ``mirrored``,
+    ``regularised`` (after grammar typing only)."""
 
     candidates: Candidates
     refined: Candidates
     landmarks: Candidates
     signature: FloatArray
     mirrored: bool
+    # after grammar typing, before relocation (same landmarks as ``landmarks``, index by index)
+    regularised: Candidates | None = None
 
 
 def _checked(
@@ -212,6 +225,27 @@ class LandmarkModel(BaseEstimator):
             return min(sides, key=self._misfit)
         return self._detect_side(motion, self.signature_.mirrored(motion))
 
+    def identify(self, motion: Motion) -> Identified:
+        """Section 5.4 alone: the signature and the classifier's candidate landmarks (the side
+        is chosen by the tutor eigenspace's variance, as `detect` does by default)."""
+        mirrored = bool(self.signature_.options.mirror and self.signature_.mirrored(motion))
+        sig = self.signature_.project(self.signature_.smoothed(motion, mirrored))
+        return Identified(self.detector_.candidates(sig), sig, mirrored)
+
+    def refine_identified(self, identified: Identified, motion: Motion) -> LandmarkResult:
+        """Section 5.5 and our grammar typing and relocation on `identify`'s candidates."""
+        sig, candidates = identified.signature, identified.candidates
+        refined = refine(candidates, sig, self.means_, self.options.refine)
+        final = refined
+        if self.options.grammar is not None:
+            final = regularise(
+                final, sig, self.means_, self.allowed_, self.options.grammar, gaps=self.gaps_
+            )
+        regularised = final
+        if self.extreme_types_:
+            final = relocate(final, pose_series(motion), self.extreme_types_)
+        return LandmarkResult(candidates, refined, final, sig, identified.mirrored, regularised)
+
     def _misfit(self, result: LandmarkResult) -> float:
         """Mean distance of the final landmarks to their types' tutor mean signatures (inf if
         none): how well a side's key poses look like the tutor's."""
@@ -224,16 +258,8 @@ class LandmarkModel(BaseEstimator):
 
     def _detect_side(self, motion: Motion, mirrored: bool) -> LandmarkResult:
         sig = self.signature_.project(self.signature_.smoothed(motion, mirrored))
-        candidates = self.detector_.candidates(sig)
-        refined = refine(candidates, sig, self.means_, self.options.refine)
-        final = refined
-        if self.options.grammar is not None:
-            final = regularise(
-                final, sig, self.means_, self.allowed_, self.options.grammar, gaps=self.gaps_
-            )
-        if self.extreme_types_:
-            final = relocate(final, pose_series(motion), self.extreme_types_)
-        return LandmarkResult(candidates, refined, final, sig, bool(mirrored))
+        identified = Identified(self.detector_.candidates(sig), sig, bool(mirrored))
+        return self.refine_identified(identified, motion)
 
 
 def periodic_landmarks(

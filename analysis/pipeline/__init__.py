@@ -11,12 +11,13 @@ from analysis.pipeline.model import (
     load_model,
 )
 from analysis.pipeline.model_fit import ModelComponents, TrainingRecording
-from analysis.pipeline.results import AnalysisSummary, KeyPose, RepetitionResult
+from analysis.pipeline.results import AnalysisSummary, AngleRange, KeyPose, RepetitionResult
 from analysis.pipeline.run import AnalysisResult, analyse
 
 __all__ = [
     "AnalysisResult",
     "AnalysisSummary",
+    "AngleRange",
     "FittedModel",
     "KeyPose",
     "ModelComponents",

@@ -24,38 +24,14 @@ from analysis.bvh import Motion
 from analysis.feedback import Grammar, default_grammar
 from analysis.pipeline.model_fit import ModelComponents, TrainingRecording, fit_components
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: the papers' parts (key poses, joint weights, pass threshold)
 MAGIC = b"PHYSIO-MODEL\n"
 FloatArray = npt.NDArray[np.float64]
 Progress = Callable[[str, float], None]
 
-# Models saved before the numerical core was split into packages name their classes by the old
-# flat module paths; reading them maps those paths to where the classes live now.
-_MOVED_MODULES = {
-    "analysis.model": "analysis.pipeline.model",
-    "analysis.model_fit": "analysis.pipeline.model_fit",
-    "analysis.bvh": "analysis.bvh.io",
-    "analysis.segmentation": "analysis.landmarks.segmentation",
-    "analysis.scoring": "analysis.assessment.scoring",
-    "analysis.assessment": "analysis.assessment.joints",
-    "analysis.signature": "analysis.landmarks.signature",
-    "analysis.landmarks": "analysis.landmarks.identification",
-    "analysis.refining": "analysis.landmarks.refining",
-    "analysis.gbdtw": "analysis.online.gbdtw",
-    "analysis.dtw": "analysis.dtw.offline",
-    "analysis.frame_costs": "analysis.dtw.frame_costs",
-}
-
 
 class ModelVersionError(ValueError):
     """A saved exercise model was written by an incompatible version of this code."""
-
-
-class _ModelUnpickler(pickle.Unpickler):
-    def find_class(self, module: str, name: str) -> Any:
-        if (module, name) == ("analysis.model", "ExerciseModel"):
-            name = "FittedModel"
-        return super().find_class(_MOVED_MODULES.get(module, module), name)
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,9 +122,7 @@ def load_model(source: bytes | IO[bytes]) -> FittedModel:
             f"the model was saved in format {version.decode(errors='replace')}; this code reads "
             f"format {FORMAT_VERSION}. Rebuild the exercise model."
         )
-    model = _ModelUnpickler(stream).load()
+    model = pickle.load(stream)
     if not isinstance(model, FittedModel):
         raise ModelVersionError("the model file holds something else")
-    if isinstance(model.components, dict):  # saved before the parts were typed
-        object.__setattr__(model, "components", ModelComponents(**model.components))
     return model

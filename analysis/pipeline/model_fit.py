@@ -25,8 +25,9 @@ from analysis.assessment import (
     tutor_mean_poses,
 )
 from analysis.bvh import Motion
-from analysis.kinematics import flatten, relative_to_start, rotations, scaled_positions
+from analysis.kinematics import flatten, relative_to_start, resample, rotations, scaled_positions
 from analysis.landmarks import ProgressAxis, fit_axis
+from analysis.pipeline.model_parts import PaperParts, fit_paper_parts
 from analysis.pipeline.prepare import mirrored, prepare, progress_signal
 
 FloatArray = npt.NDArray[np.float64]
@@ -43,7 +44,8 @@ class ModelComponents:
     ``templates``: the tutor's repetitions relative to their start, (n_k, D) each, scored at every
     ``scoring_step``-th frame by ``scorer``; ``tutor_reps``: their (start, end) frames;
     ``mean_poses``: the tutor's mean local rotations per key-pose type, (J, 4) each;
-    ``assessor``: the per-joint level model.
+    ``assessor``: the per-joint level model; ``papers``: the key-pose model, joint weights,
+    GB-DTW scale and pass threshold (`analysis.pipeline.model_parts`).
     """
 
     axis: ProgressAxis
@@ -56,6 +58,7 @@ class ModelComponents:
     tutor_reps: list[tuple[int, int]]
     mean_poses: dict[int, FloatArray]
     assessor: LandmarkAssessor | ThresholdAssessor
+    papers: PaperParts
 
 
 @dataclass(frozen=True)
@@ -147,6 +150,12 @@ def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
     labelled = training_deviations(training, coarse, scored, step, tutor, (axis, mirror))
     scorer = fit_scorer(coarse, labelled)
     parts = assessment_parts(tutor, frames, types, training)
+    report("key poses", 0.6)
+    papers = fit_paper_parts(
+        tutor, frames, types, involved_idx, axis.progress(flatten(all_points)), reps,
+        _at_tutor_rate(training, tutor),
+        [(scorer.score(f), ok) for f, ok in labelled],
+    )  # fmt: skip
     components = ModelComponents(
         axis=axis,
         mirror=mirror,
@@ -158,10 +167,26 @@ def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
         tutor_reps=reps,
         mean_poses=parts.mean_poses,
         assessor=parts.assessor,
+        papers=papers,
     )
     report("done", 1.0)
     summary = {"tutor_repetitions": len(reps), "labelled_repetitions": len(labelled)}
-    return components, involved, {**summary, "scorer": scorer.as_dict()}
+    return components, involved, {**summary, "scorer": scorer.as_dict(), **papers.report()}
+
+
+def _at_tutor_rate(
+    training: Sequence[TrainingRecording], tutor: Motion
+) -> list[tuple[Motion, list[int], list[int]]]:
+    """Labelled recordings resampled to the tutor's frame rate, their key-pose frames moved."""
+    out = []
+    for item in training:
+        motion = resample(item.motion, tutor.fps)
+        rate = motion.fps / item.motion.fps
+        last = motion.n_frames - 1
+        marks = sorted({min(round(f * rate), last): t for f, t in zip(
+            item.landmark_frames, item.landmark_types, strict=True)}.items())  # fmt: skip
+        out.append((motion, [f for f, _ in marks], [t for _, t in marks]))
+    return out
 
 
 def assessment_parts(
@@ -201,7 +226,7 @@ def training_deviations(  # noqa: PLR0917 (the scoring set-up the pipeline uses)
     axis, mirror = side
     out: list[tuple[FloatArray, bool]] = []
     for item in training:
-        prepared = prepare(item.motion, tutor.skeleton.names, tutor.fps, axis.rep_frames)
+        prepared = prepare(item.motion, tutor.skeleton, tutor.fps, axis.rep_frames)
         _, use_mirror = progress_signal(prepared, axis, mirror)
         points = mirrored(prepared.points, mirror) if use_mirror else prepared.points
         feats = flatten(points[:, scored])

@@ -8,12 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from analysis.bvh import Motion, RecordingTooShortError, map_joints
+from analysis.bvh import Motion, RecordingTooShortError, Skeleton, map_joints, map_onto
 from analysis.kinematics import flatten, joint_angles, resample, rotations, scaled_positions
 from analysis.landmarks import ProgressAxis
 
 FloatArray = npt.NDArray[np.float64]
-MIN_SECONDS = 1.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,8 +35,10 @@ class Prepared:
 
 
 def check_length(motion: Motion, rep_frames: float, model_fps: float) -> None:
+    """Refuse a recording shorter than half the tutor's repetition: quick movements are real
+    repetitions, so the bar follows the exercise, not a fixed time."""
     seconds = motion.duration
-    needed = max(MIN_SECONDS, 0.5 * rep_frames / model_fps)
+    needed = 0.5 * rep_frames / model_fps
     if motion.n_frames < 4 or seconds < needed:
         raise RecordingTooShortError(
             f"The recording lasts {seconds:.1f} s ({motion.n_frames} frames); at least "
@@ -46,9 +47,16 @@ def check_length(motion: Motion, rep_frames: float, model_fps: float) -> None:
 
 
 def prepare(
-    motion: Motion, model_names: tuple[str, ...], fps: float, rep_frames: float
+    motion: Motion, model_names: tuple[str, ...] | Skeleton, fps: float, rep_frames: float
 ) -> Prepared:
-    """Map joints (SkeletonMismatchError if impossible), resample, compute features."""
+    """Map joints (SkeletonMismatchError if impossible), resample, compute features.
+
+    Given the model's skeleton (``model.tutor.skeleton``) rather than its joint names, a recording
+    of any rig is first put on that skeleton with `analysis.bvh.map_onto`.
+    """
+    if isinstance(model_names, Skeleton):
+        motion = map_onto(motion, model_names)
+        model_names = model_names.names
     mapping = map_joints(model_names, motion.skeleton.names)
     check_length(motion, rep_frames, fps)
     at_rate = resample(motion, fps)

@@ -19,24 +19,71 @@ JSON = dict[str, Any]
 
 @dataclass(frozen=True)
 class KeyPose:
-    """A landmark of the recording: its frame and the tutor's key-pose type (1 starts a rep)."""
+    """A landmark of the recording: its frame, the tutor's key-pose type (1 starts a rep) and
+    where it comes from: "identified" (the classifier's frame as is), "refined" (chosen among
+    candidates or moved by refining) or "inserted" (added to complete the cycle)."""
 
     frame: int
     type: int
+    origin: str = "identified"
 
     def to_json(self) -> JSON:
-        return {"frame": self.frame, "type": self.type}
+        return {"frame": self.frame, "type": self.type, "origin": self.origin}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> KeyPose:
-        return cls(int(data["frame"]), int(data["type"]))
+        return cls(int(data["frame"]), int(data["type"]), str(data.get("origin", "identified")))
+
+
+@dataclass(frozen=True)
+class Guidance:
+    """One piece of paper 001's guidance ("too fast", "too slow", "overdone", "incomplete") with
+    the first and last frame of the recording where it happens."""
+
+    type: str
+    frames: tuple[int, int]
+
+    def to_json(self) -> JSON:
+        return {"type": self.type, "frames": list(self.frames)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Guidance:
+        first, last = data["frames"]
+        return cls(str(data["type"]), (int(first), int(last)))
+
+
+@dataclass(frozen=True)
+class PeriodicSummary:
+    """What periodic landmark sequence analysis worked on: the number of candidate landmarks,
+    and the frames of the key poses it removed and of those inserted to complete the cycle."""
+
+    candidates: int = 0
+    removed: tuple[int, ...] = ()
+    inserted: tuple[int, ...] = ()
+
+    def to_json(self) -> JSON:
+        return {
+            "candidates": self.candidates,
+            "removed": list(self.removed),
+            "inserted": list(self.inserted),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> PeriodicSummary:
+        return cls(
+            int(data.get("candidates", 0)),
+            tuple(int(f) for f in data.get("removed", ())),
+            tuple(int(f) for f in data.get("inserted", ())),
+        )
 
 
 @dataclass(frozen=True)
 class RepetitionResult:
-    """One repetition: frames (start, end-of-range peak, end), score 0–100, its distance to the
-    tutor, how far along the tutor's movement it went (reach, 1 = as far), its duration over the
-    tutor's (tempo) and the main guidance ("" when none)."""
+    """One repetition: frames (start, end-of-range peak, end), score 0–100 and whether it passed
+    the exercise's threshold, its distance to the tutor, how far along the tutor's movement it
+    went (reach, 1 = as far), its duration over the tutor's (tempo), paper 001's guidance with
+    the frames where each applies and its GB-DTW score, and paper 003's alignment quality
+    (Kendall τ, −1..1) and similarity (mean angular distance to the tutor, degrees)."""
 
     start: int
     end: int
@@ -45,18 +92,28 @@ class RepetitionResult:
     deviation: float = 0.0
     reach: float = 0.0
     tempo: float = 1.0
-    guidance: str = ""
+    guidance: tuple[Guidance, ...] = ()
+    passed: bool = True
+    gbdtw_score: float | None = None
+    alignment_tau: float | None = None
+    similarity: float | None = None
+
+    @property
+    def main_guidance(self) -> str:
+        """The most pressing guidance type, "" when there is none."""
+        return self.guidance[0].type if self.guidance else ""
 
     def to_json(self) -> JSON:
         return {
             "start": self.start, "end": self.end, "peak": self.peak, "score": self.score,
-            "deviation": self.deviation, "reach": self.reach, "tempo": self.tempo,
-            "guidance": self.guidance,
+            "passed": self.passed, "deviation": self.deviation, "reach": self.reach,
+            "tempo": self.tempo, "guidance": [g.to_json() for g in self.guidance],
+            "gbdtw_score": self.gbdtw_score, "alignment_tau": self.alignment_tau,
+            "similarity": self.similarity,
         }  # fmt: skip
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> RepetitionResult:
-        guidance = data.get("guidance") or ""
         return cls(
             start=int(data["start"]),
             end=int(data["end"]),
@@ -65,8 +122,44 @@ class RepetitionResult:
             deviation=float(data.get("deviation", 0.0)),
             reach=float(data.get("reach", 0.0)),
             tempo=float(data.get("tempo", 1.0)),
-            guidance=guidance if isinstance(guidance, str) else "",
+            guidance=_guidance_from_json(data),
+            passed=bool(data.get("passed", True)),
+            gbdtw_score=_optional_float(data.get("gbdtw_score")),
+            alignment_tau=_optional_float(data.get("alignment_tau")),
+            similarity=_optional_float(data.get("similarity")),
         )
+
+
+def _optional_float(value: Any) -> float | None:
+    return None if value is None else float(value)
+
+
+def _guidance_from_json(data: Mapping[str, Any]) -> tuple[Guidance, ...]:
+    """Guidance items; runs stored before they had frames kept one type for the repetition."""
+    stored = data.get("guidance") or ()
+    if isinstance(stored, str):
+        return (Guidance(stored, (int(data["start"]), int(data["end"]))),)
+    return tuple(Guidance.from_json(g) for g in stored)
+
+
+@dataclass(frozen=True)
+class AngleRange:
+    """The smallest and largest value of one anatomical angle over a stretch, and their span,
+    in degrees (flexion and abduction positive, 0 in the anatomical standing pose)."""
+
+    min: float
+    max: float
+
+    @property
+    def range(self) -> float:
+        return round(self.max - self.min, 2)
+
+    def to_json(self) -> JSON:
+        return {"min": self.min, "max": self.max, "range": self.range}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> AngleRange:
+        return cls(float(data["min"]), float(data["max"]))
 
 
 def assessment_to_json(item: LandmarkAssessment) -> JSON:
@@ -93,6 +186,11 @@ class AnalysisSummary:
     range_of_motion: Mapping[str, float] = field(default_factory=dict)
     tempo: float | None = None
     timings_ms: Mapping[str, float] = field(default_factory=dict)
+    segmentation: str = "landmarks"  # "fallback": cut on the progress axis (no key-pose cycle)
+    periodic: PeriodicSummary = field(default_factory=PeriodicSummary)
+    pass_threshold: float = 50.0  # on the 0–100 scale
+    # anatomical name (CONTRACTS.md, e.g. "knee_flexion_left") -> its range over the recording
+    clinical_angles: Mapping[str, AngleRange] = field(default_factory=dict)
 
     @property
     def repetition_count(self) -> int:
@@ -121,6 +219,10 @@ class AnalysisSummary:
             "tempo": self.tempo,
             "repetition_count": self.repetition_count,
             "timings_ms": dict(self.timings_ms),
+            "segmentation": self.segmentation,
+            "periodic": self.periodic.to_json(),
+            "pass_threshold": self.pass_threshold,
+            "clinical_angles": {k: v.to_json() for k, v in self.clinical_angles.items()},
         }
 
     @classmethod
@@ -142,4 +244,11 @@ class AnalysisSummary:
             },
             tempo=None if tempo is None else float(tempo),
             timings_ms={str(k): float(v) for k, v in (data.get("timings_ms") or {}).items()},
+            segmentation=str(data.get("segmentation", "fallback")),
+            periodic=PeriodicSummary.from_json(data.get("periodic") or {}),
+            pass_threshold=float(data.get("pass_threshold", 50.0)),
+            clinical_angles={
+                str(k): AngleRange.from_json(v)
+                for k, v in (data.get("clinical_angles") or {}).items()
+            },
         )

@@ -19,15 +19,18 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh import Motion
-from analysis.landmarks import segment
+from analysis.clinical import clinical_angles
+from analysis.pipeline.keyposes import KeyPoseRepetitions, key_pose_repetitions, periodic_analysis
 from analysis.pipeline.model import FittedModel
-from analysis.pipeline.prepare import mirrored, prepare, progress_signal
-from analysis.pipeline.results import AnalysisSummary, RepetitionResult
+from analysis.pipeline.prepare import Prepared, mirrored, prepare, progress_signal
+from analysis.pipeline.repetition_stage import gesture_results, synchronise
+from analysis.pipeline.results import AnalysisSummary, KeyPose, RepetitionResult
 from analysis.pipeline.stages import (
     assess_landmarks,
     feedback_items,
     joint_ranges,
     label_landmarks,
+    performance_level,
     playback_arrays,
     repetition_results,
     tempo_median,
@@ -57,21 +60,37 @@ class AnalysisResult:
 class StageTimer:
     """Times each stage (ms) and reports progress before it starts."""
 
-    def __init__(self, on_progress: Progress | None, stages: list[str]) -> None:
+    def __init__(self, on_progress: Progress | None, stages: list[tuple[str, str]]) -> None:
         self.on_progress = on_progress
-        self.stages = stages
+        self.keys = [key for key, _ in stages]
+        self.labels = dict(stages)
         self.timings: dict[str, float] = {}
 
     @contextmanager
     def __call__(self, stage: str) -> Iterator[None]:
         if self.on_progress is not None:
-            self.on_progress(stage, self.stages.index(stage) / len(self.stages))
+            self.on_progress(self.labels[stage], self.keys.index(stage) / len(self.keys))
         start = time.perf_counter()
         yield
         self.timings[stage] = round((time.perf_counter() - start) * 1000.0, 3)
 
 
-STAGES = ["prepare", "repetitions", "scores", "assessment", "feedback", "playback"]
+# (timing key, what the progress bar says)
+STAGES = [
+    ("prepare", "reading the recording"),
+    ("landmark_identification", "finding key poses"),
+    ("landmark_refining", "refining key poses"),
+    ("periodic_analysis", "checking the order of key poses"),
+    ("repetitions", "counting repetitions"),
+    ("synchronisation", "matching the reference in time"),
+    ("alignment", "comparing each repetition"),
+    ("scores", "scoring repetitions"),
+    ("assessment", "assessing each key pose"),
+    ("feedback", "writing feedback"),
+    ("performance_level", "updating the level"),
+    ("adjustment", "preparing the playback"),
+    ("clinical_angles", "measuring joint angles"),
+]
 
 
 def analyse(
@@ -83,24 +102,39 @@ def analyse(
     """Analyse one recording (see the module docstring)."""
     timer = StageTimer(on_progress, STAGES)
     parts = model.components
+    papers = parts.papers
     with timer("prepare"):
-        prepared = prepare(motion, model.joint_names, model.fps, parts.axis.rep_frames)
-    with timer("repetitions"):
+        prepared = prepare(motion, model.tutor.skeleton, model.fps, parts.axis.rep_frames)
         progress, used_mirror = progress_signal(prepared, parts.axis, parts.mirror)
-        segments = segment(progress, parts.axis.rep_frames)
-        landmarks = label_landmarks(prepared, segments, model)
-    with timer("scores"):
+    with timer("landmark_identification"):
+        identified = papers.landmarks.identify(prepared.motion)
+    with timer("landmark_refining"):
+        refined = papers.landmarks.refine_identified(identified, prepared.motion)
+    with timer("periodic_analysis"):
+        kept, origin, periodic = periodic_analysis(papers.landmarks, refined)
+    with timer("repetitions"):
+        cut = key_pose_repetitions(kept, origin, papers.landmarks, progress, parts.axis.rep_frames)
+        landmarks = _shown_landmarks(cut, prepared, model)
+    with timer("synchronisation"):
+        sync = synchronise(landmarks, model)
+    with timer("alignment"):
         # scored as the tutor's side when the patient used the other one
         scored = prepared
         if used_mirror:
             scored = replace(prepared, points=mirrored(prepared.points, parts.mirror))
-        repetitions = repetition_results(scored, segments, progress, model)
+        gestures = gesture_results(prepared, cut.segments, progress, sync, model)
+    with timer("scores"):
+        repetitions = repetition_results(scored, cut.segments, progress, model, gestures)
     with timer("assessment"):
         assessment = assess_landmarks(prepared, landmarks, model)
     with timer("feedback"):
-        feedback, gamma = feedback_items(assessment, model, history)
-    with timer("playback"):
+        feedback = feedback_items(assessment, model)
+    with timer("performance_level"):
+        gamma = performance_level(assessment, history)
+    with timer("adjustment"):
         playback = playback_arrays(prepared, landmarks, model, gamma)
+    with timer("clinical_angles"):
+        angles = clinical_angles(prepared.motion)
     if on_progress is not None:
         on_progress("done", 1.0)
     summary = AnalysisSummary(
@@ -116,8 +150,21 @@ def analyse(
         range_of_motion=joint_ranges(prepared, model),
         tempo=tempo_median(repetitions),
         timings_ms=timer.timings,
+        segmentation=cut.segmentation,
+        periodic=periodic,
+        pass_threshold=papers.threshold.value,
+        clinical_angles=angles,
     )
     return AnalysisResult(summary, playback)
+
+
+def _shown_landmarks(
+    cut: KeyPoseRepetitions, prepared: Prepared, model: FittedModel
+) -> tuple[KeyPose, ...]:
+    """The key poses the result shows; on the fallback cut, labelled from the progress axis."""
+    if cut.segmentation == "fallback":
+        return label_landmarks(prepared, cut.segments, model)
+    return cut.landmarks
 
 
 def _recording_score(repetitions: tuple[RepetitionResult, ...]) -> float:

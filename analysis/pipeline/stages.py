@@ -4,20 +4,21 @@ assessment, feedback, performance level and playback arrays. Each returns the ty
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from analysis.adjustment import Performance, demonstration_skeletons, gamma_vector
-from analysis.assessment import guidance_for, landmark_features, repetition_features, update_levels
+from analysis.assessment import landmark_features, repetition_features, update_levels
 from analysis.feedback import Comment, Grammar, LandmarkAssessment
 from analysis.kinematics import flatten, range_of_motion, relative_to_start, translations
 from analysis.kinematics import quaternions as quat
 from analysis.landmarks import Segments
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import Prepared
+from analysis.pipeline.repetition_stage import GestureResult
 from analysis.pipeline.results import KeyPose, RepetitionResult
 
 FloatArray = npt.NDArray[np.float64]
@@ -48,25 +49,36 @@ def _closest_type(prepared: Prepared, frame: int, types: list[int], model: Fitte
 
 
 def repetition_results(
-    prepared: Prepared, segments: Segments, progress: FloatArray, model: FittedModel
+    prepared: Prepared,
+    segments: Segments,
+    progress: FloatArray,
+    model: FittedModel,
+    gestures: Sequence[GestureResult],
 ) -> tuple[RepetitionResult, ...]:
-    """Per repetition: frames, score 0–100, distance to the tutor, guidance, tempo."""
+    """Per repetition: frames, score 0–100 and pass/fail, distance to the tutor, reach, tempo,
+    and the alignment stage's guidance, GB-DTW score and paper 003 figures."""
     parts = model.components
+    threshold = parts.papers.threshold.value
     movement = flatten(prepared.points[:, parts.scored_index])
     tutor_frames = float(np.median([len(t) for t in parts.templates]))
     step = parts.scoring_step
     out = []
-    for start, end, peak in zip(segments.starts, segments.ends, segments.peaks, strict=True):
+    for k, (start, end, peak) in enumerate(
+        zip(segments.starts, segments.ends, segments.peaks, strict=True)
+    ):
         segment = relative_to_start(movement[start : end + 1])
         features = repetition_features(segment[::step], [t[::step] for t in parts.templates])
         dev = features[: len(parts.scored_index)]
-        reach = float(progress[peak] - progress[start])
-        tempo = (end - start + 1) / tutor_frames
+        score = round(parts.scorer.score(features), 2)
+        gesture = gestures[k]
         out.append(RepetitionResult(
-            start=int(start), end=int(end), peak=int(peak),
-            score=round(parts.scorer.score(features), 2),
-            deviation=round(float(dev.mean()), 5), reach=round(reach, 3),
-            tempo=round(float(tempo), 3), guidance=guidance_for(tempo, reach),
+            start=int(start), end=int(end), peak=int(peak), score=score,
+            deviation=round(float(dev.mean()), 5),
+            reach=round(float(progress[peak] - progress[start]), 3),
+            tempo=round(float((end - start + 1) / tutor_frames), 3),
+            guidance=gesture.guidance, passed=bool(score >= threshold),
+            gbdtw_score=gesture.score, alignment_tau=gesture.alignment_tau,
+            similarity=gesture.similarity,
         ))  # fmt: skip
     return tuple(out)
 
@@ -90,19 +102,22 @@ def assess_landmarks(
 
 
 def feedback_items(
-    assessment: tuple[LandmarkAssessment, ...],
-    model: FittedModel,
-    history: Mapping[str, float] | None,
-) -> tuple[tuple[Comment, ...], dict[str, float]]:
-    """Feedback sentences from the exercise's grammar, and the updated performance level γ."""
-    grammar = Grammar.parse(model.grammar)
-    comments = tuple(grammar.comments(list(assessment)))
+    assessment: tuple[LandmarkAssessment, ...], model: FittedModel
+) -> tuple[Comment, ...]:
+    """Feedback sentences from the exercise's grammar."""
+    return tuple(Grammar.parse(model.grammar).comments(list(assessment)))
+
+
+def performance_level(
+    assessment: tuple[LandmarkAssessment, ...], history: Mapping[str, float] | None
+) -> dict[str, float]:
+    """The patient's performance level γ per joint, updated with this session's levels."""
     per_joint: dict[str, list[int]] = {}
     for item in assessment:
         for joint, level in item.levels.items():
             per_joint.setdefault(joint, []).append(level)
     gamma = update_levels(history, per_joint)
-    return comments, {j: round(v, 4) for j, v in gamma.items()}
+    return {j: round(v, 4) for j, v in gamma.items()}
 
 
 def playback_arrays(

@@ -92,3 +92,16 @@ def test_pose_distance_angular_and_positional() -> None:
     assert pose_distance(p, q, kind="positional") == pytest.approx(15.0)
     with pytest.raises(ValueError):
         pose_distance(p, q, kind="velocity")
+
+
+def test_vectorised_kendall_tau_b_matches_scipy_with_ties() -> None:
+    from scipy import stats
+
+    from analysis.dtw.metrics import kendall_tau_b
+
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(150, 6))
+    b = np.round(a + rng.normal(size=a.shape), 1)  # rounding makes ties
+    a[::4, 1] = a[0, 1]
+    expected = [stats.kendalltau(a[:, c], b[:, c]).statistic for c in range(6)]
+    np.testing.assert_allclose(kendall_tau_b(a, b, block=16), expected, atol=1e-12)

@@ -13,6 +13,7 @@ import pytest
 from analysis.bvh import RecordingTooShortError, SkeletonMismatchError, read
 from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.pipeline import ModelVersionError, analyse, build_model, dump_model, load_model
+from analysis.pipeline.model import FORMAT_VERSION
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 FIELDS = {"frames", "fps", "landmarks", "repetitions", "score", "assessment", "feedback",
@@ -106,7 +107,7 @@ def test_model_file_round_trip_and_version_check(models):
     dump_model(models["m05"], buffer)
     loaded = load_model(buffer.getvalue())
     assert loaded.landmark_frames == models["m05"].landmark_frames
-    broken = buffer.getvalue().replace(b"\n1\n", b"\n99\n", 1)
+    broken = buffer.getvalue().replace(f"\n{FORMAT_VERSION}\n".encode(), b"\n99\n", 1)
     with pytest.raises(ModelVersionError):
         load_model(broken)
     with pytest.raises(ModelVersionError):
@@ -135,4 +136,6 @@ def test_reduced_range_scores_lower_than_full_range():
         generate(SyntheticConfig(noise_deg=0.3, range_of_motion=0.5), seed=5).motion, model
     ).to_json()
     assert good["score"] > weak["score"]
-    assert any(r["guidance"] == "incomplete" for r in weak["repetitions"])
+    assert any(
+        r["guidance"] and r["guidance"][0]["type"] == "incomplete" for r in weak["repetitions"]
+    )

@@ -34,7 +34,8 @@ def test_ten_repetitions_start_in_the_middle_of_each_rest() -> None:
     signal, starts = _session([_hump(20, 5)] * 10, [8] + [16] * 10)
     found = segment(signal, REP)
     assert found.starts.size == 10
-    assert np.abs(found.starts[1:] - np.array(starts[1:])).max() <= 1
+    # cut 45 % of the way through each 16-frame rest (REST_SPLIT), one frame before its middle
+    assert np.abs(found.starts[1:] - np.array(starts[1:])).max() <= 2
     assert 0 <= found.starts[0] < 8  # within the rest before the first movement
     assert np.all(found.starts < found.peaks) and np.all(found.peaks <= found.ends)
     assert np.all(found.ends[:-1] == found.starts[1:] - 1)
