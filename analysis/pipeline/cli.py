@@ -79,6 +79,11 @@ def parser() -> argparse.ArgumentParser:
     a.add_argument("recording")
     a.add_argument("--json", action="store_true", help="one compact JSON object")
     a.set_defaults(handler=run_analysis)
+    from analysis.online import stream  # live sessions (CONTRACTS.md)
+
+    s = commands.add_parser("stream", help="stream a recording to an on-line aligner")
+    stream.add_arguments(s)
+    s.set_defaults(handler=stream.run)
     return top
 
 

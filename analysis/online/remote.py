@@ -1,0 +1,186 @@
+"""The server side of ``python -m analysis stream --server``: create a live session over HTTP,
+stream the frames over its WebSocket, print the events, resume after a dropped connection.
+
+Frames carry sequence numbers; on (re)connecting, the server's ``ready`` event says which frame
+it expects next, and the client resends from there, so a reconnect loses nothing. The client
+keeps under the ``max_fps`` the server announces, so ``--speed max`` is never rate-limited.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import threading
+import urllib.error
+import urllib.parse
+import urllib.request
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from websockets.asyncio.client import ClientConnection, connect
+from websockets.exceptions import ConnectionClosed, InvalidStatus, InvalidURI
+
+from analysis.online.live import Event
+from analysis.online.sources import Source, StreamInputError, print_event
+
+FloatArray = npt.NDArray[np.float64]
+RETRIES = 6
+SEND_SHARE = 0.8  # of the server's max_fps
+
+
+@dataclass
+class Buffer:
+    """Frames read so far (kept for resending) and whether the source has ended."""
+
+    frames: list[FloatArray] = field(default_factory=list)
+    done: bool = False
+    error: BaseException | None = None
+    printed: dict[str, int] = field(default_factory=dict)  # newest frame / repetition printed
+    changed: asyncio.Event = field(default_factory=asyncio.Event)
+
+
+def _post_json(url: str, token: str, body: dict[str, Any]) -> dict[str, Any]:
+    request = urllib.request.Request(
+        url,
+        data=json.dumps(body).encode(),
+        headers={"Authorization": f"Token {token}", "Content-Type": "application/json"},
+        method="POST",
+    )
+    with urllib.request.urlopen(request, timeout=30) as response:
+        return dict(json.loads(response.read()))
+
+
+def create_session(server: str, token: str, patient: str, exercise: str) -> dict[str, Any]:
+    """POST /api/v1/live-sessions/ -> {"id", "ws"}; StreamInputError when refused."""
+    if urllib.parse.urlsplit(server).scheme not in ("http", "https"):
+        raise StreamInputError(f"--server takes http://HOST:PORT, got {server!r}")
+    url = server.rstrip("/") + "/api/v1/live-sessions/"
+    try:
+        return _post_json(url, token, {"patient": patient, "exercise": exercise})
+    except urllib.error.HTTPError as error:
+        if error.code in (401, 403):
+            raise StreamInputError("the server refused the token") from None
+        detail = error.read(2000).decode(errors="replace")
+        message = f"the server answered {error.code}: {' '.join(detail.split())}"
+        raise StreamInputError(message) from None
+    except (urllib.error.URLError, OSError) as error:
+        raise StreamInputError(f"cannot reach {server}: {error}") from None
+
+
+def ws_url(server: str, path: str) -> str:
+    parts = urllib.parse.urlsplit(server)
+    scheme = "wss" if parts.scheme == "https" else "ws"
+    return f"{scheme}://{parts.netloc}{path}"
+
+
+def _produce(source: Source, buffer: Buffer, loop: asyncio.AbstractEventLoop) -> None:
+    """Read the source (it may block: pacing, TCP) in a thread, waking the sender per frame."""
+    try:
+        for frame in source.frames:
+            buffer.frames.append(frame)
+            loop.call_soon_threadsafe(buffer.changed.set)
+    except (OSError, ValueError) as error:
+        buffer.error = error
+    finally:
+        buffer.done = True
+        loop.call_soon_threadsafe(buffer.changed.set)
+
+
+async def _next_frame(buffer: Buffer, seq: int) -> FloatArray | None:
+    while seq >= len(buffer.frames):
+        if buffer.done:
+            if buffer.error is not None:
+                raise StreamInputError(str(buffer.error))
+            return None
+        buffer.changed.clear()
+        if seq < len(buffer.frames) or buffer.done:
+            continue
+        await buffer.changed.wait()
+    return buffer.frames[seq]
+
+
+def _is_new(event: Event, printed: dict[str, int]) -> bool:
+    """False for an event already printed (a server that lost the session after a restart
+    aligns the resent frames again)."""
+    key = {"position": "frame", "repetition": "index"}.get(str(event.get("event")))
+    if key is None:
+        return True
+    value = int(event.get(key, -1))
+    if value <= printed.get(key, -1):
+        return False
+    printed[key] = value
+    return True
+
+
+async def _receive(
+    ws: ClientConnection, summary: asyncio.Future[Event], printed: dict[str, int]
+) -> None:
+    async for raw in ws:
+        event = json.loads(raw)
+        if _is_new(event, printed):
+            print_event(event)
+        if event.get("event") == "summary" and not summary.done():
+            summary.set_result(event)
+            return
+
+
+async def _ready(ws: ClientConnection, header: str) -> Event:
+    await ws.send(json.dumps({"type": "start", "header": header}))
+    while True:
+        event = json.loads(await ws.recv())
+        if event.get("event") == "ready":
+            return dict(event)
+        if event.get("event") == "error":
+            raise StreamInputError(f"the session refused the stream: {event.get('message')}")
+
+
+async def _session(ws: ClientConnection, source: Source, buffer: Buffer) -> Event:
+    """One connection: start (or resume), send the frames, end, wait for the summary."""
+    ready = await _ready(ws, source.header)
+    gap = 1.0 / (SEND_SHARE * float(ready.get("max_fps") or 1000.0))
+    summary: asyncio.Future[Event] = asyncio.get_running_loop().create_future()
+    reader = asyncio.create_task(_receive(ws, summary, buffer.printed))
+    seq = int(ready["next_seq"])
+    loop = asyncio.get_running_loop()
+    try:
+        while (frame := await _next_frame(buffer, seq)) is not None:
+            sent = loop.time()
+            await ws.send(json.dumps({"type": "frame", "seq": seq, "values": frame.tolist()}))
+            seq += 1
+            if (wait := sent + gap - loop.time()) > 0:
+                await asyncio.sleep(wait)
+        await ws.send(json.dumps({"type": "end"}))
+        return await asyncio.wait_for(summary, timeout=120)
+    finally:
+        reader.cancel()
+
+
+async def stream_to(url: str, token: str, source: Source) -> Event:
+    buffer = Buffer()
+    loop = asyncio.get_running_loop()
+    threading.Thread(target=_produce, args=(source, buffer, loop), daemon=True).start()
+    headers = {"Authorization": f"Token {token}"}
+    for attempt in range(RETRIES + 1):
+        try:
+            async with connect(url, additional_headers=headers, max_size=1 << 22) as ws:
+                return await _session(ws, source, buffer)
+        except InvalidStatus as error:
+            code = error.response.status_code
+            raise StreamInputError(f"the server refused the live session ({code})") from None
+        except (ConnectionClosed, OSError, TimeoutError) as error:
+            if attempt == RETRIES:
+                raise StreamInputError(f"lost the connection to the server: {error}") from None
+            await asyncio.sleep(min(0.2 * 2**attempt, 3.0))
+    raise StreamInputError("lost the connection to the server")
+
+
+def run_remote(server: str, token: str, patient: str, exercise: str, source: Source) -> int:
+    """Create the session, stream, print the events; 0 on success."""
+    created = create_session(server, token, patient, exercise)
+    try:
+        asyncio.run(stream_to(ws_url(server, str(created["ws"])), token, source))
+    except InvalidURI as error:
+        raise StreamInputError(str(error)) from None
+    return 0

@@ -1,0 +1,202 @@
+"""The live-session protocol, without any server: messages in, events out.
+
+A capture client sends JSON messages over a WebSocket (the server) or calls `handle` directly:
+
+    {"type": "start", "header": "HIERARCHY ... MOTION\\nFrames: 0\\nFrame Time: 0.0333\\n"}
+    {"type": "frame", "seq": 0, "values": [c1, c2, ...]}       # or "line": "c1 c2 ..." (BVH text)
+    {"type": "end"}
+
+Events back: ``ready`` (with ``next_seq``: where a reconnecting client resumes, and ``max_fps``),
+``position`` and ``repetition`` (see `analysis.online.live`), ``error`` (``code``, ``message``,
+``seq``), and last ``summary``. A bad message gets an error event and changes nothing: a frame
+with the wrong number of values, a value that is not a finite number, a sequence number other
+than the next one (a repeat of an earlier one is ignored with a ``duplicate`` error, so a client
+resending after a reconnect loses nothing), or a frame over the rate limit (dropped and counted).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from analysis.bvh import AnalysisInputError, BVHError, Motion, dumps, read
+from analysis.online.live import Event, LiveAligner, LiveOptions
+from analysis.pipeline.model import FittedModel
+
+FloatArray = npt.NDArray[np.float64]
+MAX_HEADER_BYTES = 1 << 20
+MAX_VALUES = 8_000_000  # values kept per session, as for an upload (a 30-minute session)
+
+
+class ProtocolError(ValueError):
+    """A message the session cannot use; ``code`` names the kind."""
+
+    def __init__(self, code: str, message: str, seq: int | None = None) -> None:
+        super().__init__(message)
+        self.code, self.seq = code, seq
+
+
+@dataclass
+class RateLimit:
+    """Token bucket: ``rate`` frames per second on average, bursts of ``burst`` frames."""
+
+    rate: float
+    burst: float
+    clock: Callable[[], float] = time.monotonic
+    _tokens: float = field(init=False, default=0.0)
+    _last: float | None = field(init=False, default=None)
+
+    def allow(self) -> bool:
+        now = self.clock()
+        if self._last is None:
+            self._tokens = self.burst
+        else:
+            self._tokens = min(self.burst, self._tokens + (now - self._last) * self.rate)
+        self._last = now
+        if self._tokens < 1.0:
+            return False
+        self._tokens -= 1.0
+        return True
+
+
+def error_event(error: ProtocolError) -> Event:
+    return {"event": "error", "code": error.code, "message": str(error), "seq": error.seq}
+
+
+def parse_values(message: dict[str, Any], n_channels: int, seq: int) -> FloatArray:
+    """The frame's channel values (C,), or ProtocolError saying what is wrong with them."""
+    raw = message.get("values", message.get("line"))
+    if isinstance(raw, str):
+        raw = raw.split()
+    if not isinstance(raw, list):
+        raise ProtocolError("bad-frame", "a frame needs 'values' (a list) or 'line' (text)", seq)
+    if len(raw) != n_channels:
+        raise ProtocolError(
+            "value-count", f"frame {seq} has {len(raw)} values; the skeleton has {n_channels}", seq
+        )
+    try:
+        values = np.array([float(v) for v in raw], dtype=np.float64)
+    except (TypeError, ValueError):
+        text = f"frame {seq} holds a value that is not a number"
+        raise ProtocolError("not-a-number", text, seq) from None
+    if not np.all(np.isfinite(values)):
+        raise ProtocolError("not-finite", f"frame {seq} holds NaN or infinite values", seq)
+    return values
+
+
+class LiveSession:
+    """One session's state: the skeleton, the frames kept (for the recording), the aligner."""
+
+    def __init__(
+        self,
+        model: FittedModel,
+        *,
+        max_fps: float = 1000.0,
+        burst: float = 250.0,
+        options: LiveOptions | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.model, self.options = model, options
+        self.max_fps = max_fps
+        self.limit = RateLimit(max_fps, burst, clock)
+        self.motion: Motion | None = None
+        self.aligner: LiveAligner | None = None
+        self.frames: list[FloatArray] = []
+        self.dropped = 0
+        self.errors = 0
+        self.ended = False
+        self.delivery_ms: list[float] = []  # frame received -> position sent, by the server
+
+    @property
+    def next_seq(self) -> int:
+        return len(self.frames)
+
+    def ready(self) -> Event:
+        return {
+            "event": "ready",
+            "next_seq": self.next_seq,
+            "max_fps": self.max_fps,
+            "started": self.motion is not None,
+        }
+
+    def handle(self, message: Any) -> list[Event]:
+        """Events answering one decoded JSON message (never raises for bad input)."""
+        try:
+            return self._dispatch(message)
+        except ProtocolError as error:
+            self.errors += 1
+            return [error_event(error)]
+
+    def _dispatch(self, message: Any) -> list[Event]:
+        kind = message.get("type") if isinstance(message, dict) else None
+        if kind == "frame":
+            return self._frame(message)
+        if kind == "start":
+            return self._start(message)
+        if kind == "end":
+            return self.end()
+        raise ProtocolError("bad-message", "send a JSON object with type start, frame or end")
+
+    def _start(self, message: dict[str, Any]) -> list[Event]:
+        header = message.get("header")
+        if not isinstance(header, str) or len(header) > MAX_HEADER_BYTES:
+            raise ProtocolError("bad-header", "'start' needs the BVH header text ('header')")
+        try:
+            motion = read(header.encode(), max_values=0)
+            if self.motion is not None:  # a reconnect: the skeleton must not change
+                same = motion.skeleton.names == self.motion.skeleton.names
+                if not same or motion.skeleton.n_channels != self.motion.skeleton.n_channels:
+                    raise ProtocolError("bad-header", "the skeleton differs from this session's")
+                return [self.ready()]
+            self.aligner = LiveAligner(self.model, motion.skeleton, motion.fps, self.options)
+        except (BVHError, AnalysisInputError) as error:
+            raise ProtocolError("bad-header", " ".join(str(error).split())) from None
+        self.motion = motion
+        return [self.ready()]
+
+    def _frame(self, message: dict[str, Any]) -> list[Event]:
+        if self.motion is None or self.aligner is None or self.ended:
+            raise ProtocolError("not-started", "send 'start' with the BVH header before frames")
+        seq = message.get("seq")
+        if not isinstance(seq, int) or isinstance(seq, bool):
+            raise ProtocolError("bad-seq", "a frame needs an integer 'seq'")
+        if seq < self.next_seq:
+            raise ProtocolError("duplicate", f"frame {seq} was already received", seq)
+        if seq > self.next_seq:
+            raise ProtocolError(
+                "out-of-order", f"frame {seq} arrived; expected frame {self.next_seq}", seq
+            )
+        values = parse_values(message, self.motion.skeleton.n_channels, seq)
+        if (len(self.frames) + 1) * values.size > MAX_VALUES:
+            raise ProtocolError("too-long", "the session holds as many frames as it can: end it")
+        if not self.limit.allow():
+            self.dropped += 1
+            raise ProtocolError("rate-limit", f"over {self.max_fps:g} frames/s: dropped", seq)
+        self.frames.append(values)
+        return self.aligner.push(values)
+
+    def end(self) -> list[Event]:
+        """Finish the session: the last repetition (if any) and the summary."""
+        if self.ended:
+            raise ProtocolError("ended", "the session has ended")
+        self.ended = True
+        if self.aligner is None:
+            return [self.summary_only()]
+        events = self.aligner.finish()
+        events[-1].update(dropped=self.dropped, errors=self.errors)
+        return events
+
+    def summary_only(self) -> Event:
+        return {"event": "summary", "repetitions": 0, "frames": 0, "latency_ms_p95": 0.0,
+                "recording": None, "dropped": self.dropped, "errors": self.errors}  # fmt: skip
+
+    def bvh(self) -> str | None:
+        """The frames received as one BVH text (None without frames)."""
+        if self.motion is None or not self.frames:
+            return None
+        return dumps(self.motion.with_frames(np.vstack(self.frames)))

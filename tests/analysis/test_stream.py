@@ -1,0 +1,235 @@
+"""Live sessions without a server: ``python -m analysis stream --model``, the session protocol,
+streaming GB-DTW, the TCP relay and the WebSocket client's resume after a dropped connection."""
+
+from __future__ import annotations
+
+import asyncio
+import gzip
+import itertools
+import json
+import socket
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from analysis.bvh import read
+from analysis.dtw import DTWOptions
+from analysis.online.gbdtw import GBDTWOptions
+from analysis.online.gestures import GestureLimits, GestureStream
+from analysis.online.session import LiveSession, RateLimit
+from analysis.online.stream import Source, header_text
+from analysis.pipeline import analyse, build_model, dump_model
+from analysis.pipeline.cli import main
+
+DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
+TUTOR = "sessions/m07_s01_correct.bvh.gz"
+SESSION = DATA / "sessions/m07_s03_incorrect.bvh.gz"
+
+
+def landmarks(relative: str) -> tuple[list[int], list[int]]:
+    for line in (DATA / "landmarks.csv").read_text().splitlines():
+        if line.startswith(relative):
+            _, frames, types = line.split(",")
+            return [int(v) for v in frames.split(";")], [int(v) for v in types.split(";")]
+    raise LookupError(relative)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return build_model(read(DATA / TUTOR), *landmarks(TUTOR))
+
+
+@pytest.fixture(scope="module")
+def model_path(model, tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("model") / "m07.model"
+    with out.open("wb") as handle:
+        dump_model(model, handle)
+    return out
+
+
+def events_of(text: str) -> list[dict]:
+    return [json.loads(line) for line in text.splitlines() if line.strip()]
+
+
+@pytest.mark.parametrize("exercise", ["m07", "m08"])
+def test_stream_counts_the_offline_repetitions(exercise, model, model_path, tmp_path, capsys):
+    """m07: shoulder abduction; m08: shoulder extension by a patient twice slower than the tutor."""
+    session, path = SESSION, model_path
+    if exercise != "m07":
+        tutor = f"sessions/{exercise}_s01_correct.bvh.gz"
+        model = build_model(read(DATA / tutor), *landmarks(tutor))
+        path, session = tmp_path / "model", DATA / f"sessions/{exercise}_s02_correct.bvh.gz"
+        with path.open("wb") as handle:
+            dump_model(model, handle)
+    capsys.readouterr()
+    code = main(["stream", "--model", str(path), str(session), "--speed", "max", "--json-lines"])
+    assert code == 0
+    events = events_of(capsys.readouterr().out)
+    offline = len(analyse(read(session), model).summary.repetitions)
+    reps = [e for e in events if e["event"] == "repetition"]
+    assert abs(len(reps) - offline) <= 1
+    assert [r["index"] for r in reps] == list(range(len(reps)))
+    assert all(0 <= r["score"] <= 100 and isinstance(r["guidance"], list) for r in reps)
+    frames = [e["frame"] for e in events if e["event"] == "position"]
+    assert frames[0] < 10 and np.diff(frames).max() <= 10
+    summary = events[-1]
+    assert summary["event"] == "summary" and summary["repetitions"] == len(reps)
+    assert summary["frames"] == read(session).n_frames and summary["recording"] is None
+    assert summary["latency_ms_p95"] > 0
+
+
+def test_tutor_playback_never_goes_back_within_a_repetition(model, model_path, capsys):
+    capsys.readouterr()
+    main(["stream", "--model", str(model_path), str(DATA / "reps/m07_s01_e02.bvh.gz"),
+          "--speed", "max", "--json-lines"])  # fmt: skip
+    tutor = [
+        e["tutor_frame"] for e in events_of(capsys.readouterr().out) if e["event"] == "position"
+    ]
+    assert np.all(np.diff(tutor) >= 0) and tutor[-1] > tutor[0]
+
+
+def test_bad_input_exits_2_with_one_line(model_path, tmp_path, capsys):
+    truncated = tmp_path / "t.bvh"
+    text = gzip.decompress((DATA / "reps/m07_s01_e01.bvh.gz").read_bytes()).decode()
+    truncated.write_text(text[: len(text) // 3])
+    cases = [
+        ["stream", "--model", str(model_path), str(truncated), "--json-lines"],
+        ["stream", "--model", str(model_path), str(tmp_path / "missing.bvh")],
+        ["stream", "--model", str(model_path), str(SESSION), "--speed", "fast"],
+        ["stream", str(SESSION), "--server", "http://127.0.0.1:9", "--token", "t"],
+        ["stream", str(SESSION)],
+    ]
+    for argv in cases:
+        capsys.readouterr()
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err.startswith("error:") and err.count("\n") == 1, err
+
+
+def test_refused_token_exits_2(tmp_path, capsys, monkeypatch):
+    import urllib.error
+    import urllib.request
+
+    def refuse(*args, **kwargs):
+        raise urllib.error.HTTPError("u", 401, "Unauthorized", {}, None)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(urllib.request, "urlopen", refuse)
+    argv = ["stream", str(SESSION), "--server", "http://127.0.0.1:8000", "--token", "bad",
+            "--patient", "p", "--exercise", "e", "--json-lines"]  # fmt: skip
+    assert main(argv) == 2
+    assert "refused the token" in capsys.readouterr().err
+
+
+def start_message(path: Path) -> tuple[dict, np.ndarray]:
+    motion = read(path)
+    return {"type": "start", "header": header_text(motion)}, motion.frames
+
+
+def test_session_answers_each_bad_frame_with_an_error_and_goes_on(model):
+    session = LiveSession(model)
+    start, frames = start_message(DATA / "reps/m07_s01_e02.bvh.gz")
+    assert session.handle({"type": "frame", "seq": 0, "values": []})[0]["code"] == "not-started"
+    assert session.handle(start)[0] == {"event": "ready", "next_seq": 0, "max_fps": 1000.0,
+                                        "started": True}  # fmt: skip
+    good = frames[0].tolist()
+    assert session.handle({"type": "frame", "seq": 0, "values": good})[-1]["event"] == "position"
+    bad = {
+        "value-count": {"seq": 1, "values": good[:-2]},
+        "not-finite": {"seq": 1, "values": [float("inf"), *good[1:]]},
+        "not-a-number": {"seq": 1, "line": "a " * len(good)},
+        "out-of-order": {"seq": 7, "values": good},
+        "duplicate": {"seq": 0, "values": good},
+        "bad-frame": {"seq": 1},
+    }
+    for code, message in bad.items():
+        answer = session.handle({"type": "frame", **message})
+        assert answer == [{"event": "error", "code": code, "message": answer[0]["message"],
+                           "seq": answer[0]["seq"]}], code  # fmt: skip
+    line = " ".join(map(str, frames[1]))
+    assert session.handle({"type": "frame", "seq": 1, "line": line})[-1]["frame"] == 1
+    summary = session.end()[-1]
+    assert summary["frames"] == 2 and summary["errors"] == len(bad) + 1
+    assert read(session.bvh().encode()).n_frames == 2
+
+
+def test_rate_limit_drops_a_flood():
+    now = [0.0]
+    limit = RateLimit(rate=10.0, burst=5.0, clock=lambda: now[0])
+    assert sum(limit.allow() for _ in range(50)) == 5  # the burst, then nothing at t = 0
+    now[0] = 1.0
+    assert sum(limit.allow() for _ in range(50)) == 5  # refilled to the burst, no more
+
+
+def test_gesture_stream_finds_each_repetition_of_a_gesture():
+    t = np.linspace(0, np.pi, 40)
+    gesture = np.stack([np.sin(t), np.sin(t) ** 2], axis=1)
+    rest = np.zeros((8, 2))
+    reps = [np.interp(np.linspace(0, 39, n), np.arange(40), gesture[:, 0]) for n in (30, 40, 55)]
+    parts = [rest]
+    for r in reps:
+        parts += [np.stack([r, r**2], axis=1), rest]
+    stream = np.vstack(parts)
+    options = GBDTWOptions(confirm_frames=6, dtw=DTWOptions())
+    gs = GestureStream(gesture, options, GestureLimits(20, 120))
+    ended = [g for frame in stream for g in gs.push(frame)]
+    last = gs.finish()
+    ended += [last] if last is not None else []
+    moving = [g for g in ended if stream[g.start : g.end + 1, 0].max() > 0.5]
+    assert len(moving) == 3
+    assert all(a.end + 1 == b.start for a, b in itertools.pairwise(ended))
+
+
+def test_tcp_relay_of_frame_lines(model_path, capsys):
+    path = DATA / "reps/m07_s01_e02.bvh.gz"
+    frames = read(path).frames
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def serve() -> None:
+        conn, _ = server.accept()
+        with conn:
+            conn.sendall(b"keep-alive\n")
+            for row in frames:
+                conn.sendall((" ".join(f"{v:.4f}" for v in row) + "\n").encode())
+
+    threading.Thread(target=serve, daemon=True).start()
+    port = server.getsockname()[1]
+    capsys.readouterr()
+    argv = ["stream", "--model", str(model_path), "--tcp", f"127.0.0.1:{port}",
+            "--header", str(path), "--json-lines"]  # fmt: skip
+    assert main(argv) == 0
+    server.close()
+    assert events_of(capsys.readouterr().out)[-1]["frames"] == len(frames)
+
+
+def test_client_resumes_after_a_dropped_connection(model, capsys):
+    """A fake server that drops the first connection after 30 frames: nothing is lost."""
+    from websockets.asyncio.server import serve
+
+    from analysis.online.remote import stream_to
+
+    path = DATA / "reps/m07_s01_e02.bvh.gz"
+    motion = read(path)
+    session = LiveSession(model)
+    connections = []
+
+    async def handler(ws) -> None:
+        connections.append(ws)
+        async for raw in ws:
+            for event in session.handle(json.loads(raw)):
+                await ws.send(json.dumps(event))
+            if len(connections) == 1 and session.next_seq == 30:
+                await ws.close()
+                return
+
+    async def run() -> dict:
+        async with serve(handler, "127.0.0.1", 0) as server:
+            port = server.sockets[0].getsockname()[1]
+            source = Source(header_text(motion), motion.frame_time, iter(motion.frames))
+            return await stream_to(f"ws://127.0.0.1:{port}/", "token", source)
+
+    summary = asyncio.run(run())
+    assert len(connections) == 2
+    assert summary["frames"] == motion.n_frames
+    assert np.array_equal(np.vstack(session.frames), motion.frames)

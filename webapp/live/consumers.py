@@ -1,0 +1,167 @@
+"""The WebSocket of a live session: ``/ws/live/{session_id}/``.
+
+A capture client (API token) or a browser (signed-in session) of the session's clinic connects;
+anyone else is refused before the handshake completes. Every connection joins the session's
+group: what one connection sends (frames, see `analysis.online.session`) is answered to it
+directly and shown to the others (the live page), position events with both skeletons' poses.
+A replay session streams its stored recording from the server through the same path.
+
+Per session, the aligner state lives in this process (`SESSIONS`), so a capture client that
+reconnects resumes where it stopped; with several server processes, route a session's
+connections to one process (sticky sessions).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import time
+from typing import Any
+
+from channels.db import database_sync_to_async
+from channels.generic.websocket import AsyncWebsocketConsumer
+from django.conf import settings
+
+from analysis.bvh import AnalysisInputError
+from analysis.online.session import LiveSession as SessionState
+from analysis.online.stream import header_text
+from webapp.live import services
+from webapp.live.auth import scope_user
+from webapp.live.models import LiveSession, LiveStatus
+
+log = logging.getLogger(__name__)
+SESSIONS: dict[str, SessionState] = {}
+MAX_MESSAGE_BYTES = 1 << 20
+REFUSED = 4403
+REPLAY_SPEED = 1.0  # times real time
+
+
+def _error(code: str, message: str) -> dict[str, Any]:
+    return {"event": "error", "code": code, "message": message, "seq": None}
+
+
+class LiveConsumer(AsyncWebsocketConsumer):
+    live: LiveSession
+    replay: asyncio.Task[None] | None = None
+
+    async def connect(self) -> None:
+        session_id = str(self.scope["url_route"]["kwargs"]["session_id"])
+        user = await scope_user(self.scope)
+        live = (
+            None
+            if user is None
+            else await database_sync_to_async(services.session_for)(user, session_id)
+        )
+        if live is None:
+            await self.close(code=REFUSED)  # before accept: the handshake answers 403
+            return
+        self.user, self.live, self.key = user, live, str(live.pk)
+        self.group = f"live-{self.key}"
+        await self.channel_layer.group_add(self.group, self.channel_name)
+        await self.accept()
+        state = SESSIONS.get(self.key)
+        if state is not None:
+            await self.send_json(state.ready())
+        elif live.status == LiveStatus.ENDED:
+            await self.send_json({**live.summary, "event": "summary"})
+        elif live.replay_of_id is not None:
+            self.replay = asyncio.create_task(self._replay())
+
+    async def disconnect(self, code: int) -> None:
+        if hasattr(self, "group"):
+            await self.channel_layer.group_discard(self.group, self.channel_name)
+        if self.replay is not None:
+            self.replay.cancel()
+
+    async def receive(self, text_data: str | None = None, bytes_data: bytes | None = None) -> None:
+        received = time.perf_counter()
+        if text_data is None or len(text_data) > MAX_MESSAGE_BYTES:
+            await self.send_json(_error("bad-message", "send JSON text messages under 1 MB"))
+            return
+        try:
+            message = json.loads(text_data)
+        except ValueError:
+            await self.send_json(_error("bad-json", "the message is not valid JSON"))
+            return
+        await self.process(message, received)
+
+    async def process(self, message: Any, received: float) -> None:
+        """Answer one message: to this connection, and to the group's other connections."""
+        try:
+            state = await self._state(message)
+        except (AnalysisInputError, ValueError) as error:
+            await self.send_json(_error("bad-header", " ".join(str(error).split())))
+            return
+        for event in state.handle(message):
+            if event["event"] == "position":
+                event["latency_ms"] = round((time.perf_counter() - received) * 1000.0, 3)
+                state.delivery_ms.append(event["latency_ms"])
+            if event["event"] == "summary":
+                await self._finish(state, event)
+            await self.send_json(event)
+            await self._broadcast(state, event)
+
+    async def _state(self, message: Any) -> SessionState:
+        state = SESSIONS.get(self.key)
+        if state is None:
+            model = await database_sync_to_async(services.exercise_model)(self.live.exercise)
+            state = SESSIONS.setdefault(
+                self.key,
+                SessionState(model, max_fps=settings.LIVE_MAX_FPS, burst=settings.LIVE_BURST),
+            )
+            await database_sync_to_async(services.mark_live)(self.live)
+        return state
+
+    async def _finish(self, state: SessionState, summary: dict[str, Any]) -> dict[str, Any]:
+        """Store the frames as a Recording (the pipeline analyses it) and end the session."""
+        lat = sorted(state.delivery_ms)
+        if lat:
+            summary["latency_ms_p95"] = lat[min(len(lat) - 1, int(0.95 * len(lat)))]
+        recording = await database_sync_to_async(services.store_frames)(
+            self.live, state.bvh(), self.user
+        )
+        summary["recording"] = None if recording is None else str(recording.pk)
+        await database_sync_to_async(services.finish)(self.live, summary, recording)
+        SESSIONS.pop(self.key, None)
+        return summary
+
+    async def _broadcast(self, state: SessionState, event: dict[str, Any]) -> None:
+        if event["event"] == "position" and state.aligner is not None:
+            poses = state.aligner.poses()
+            if poses is not None:
+                parents = state.model.tutor.skeleton.parents.tolist()
+                event = {**event, "patient": _flat(poses[0]), "tutor": _flat(poses[1]),
+                         "parents": parents}  # fmt: skip
+        message = {"type": "live.event", "event": event, "origin": self.channel_name}
+        await self.channel_layer.group_send(self.group, message)
+
+    async def live_event(self, message: dict[str, Any]) -> None:
+        if message.get("origin") != self.channel_name:
+            await self.send_json(message["event"])
+
+    async def send_json(self, content: dict[str, Any]) -> None:
+        await self.send(text_data=json.dumps(content, separators=(",", ":")))
+
+    async def _replay(self) -> None:
+        """Stream the stored recording at real time through the live path."""
+        try:
+            motion = await database_sync_to_async(services.replay_motion)(self.live)
+            start = {"type": "start", "header": header_text(motion)}
+            await self.process(start, time.perf_counter())
+            begin = time.perf_counter()
+            for seq, values in enumerate(motion.frames):
+                delay = begin + seq * motion.frame_time / REPLAY_SPEED - time.perf_counter()
+                await asyncio.sleep(max(0.0, delay))
+                frame = {"type": "frame", "seq": seq, "values": values.tolist()}
+                await self.process(frame, time.perf_counter())
+            await self.process({"type": "end"}, time.perf_counter())
+        except asyncio.CancelledError:
+            raise
+        except Exception:  # a replay must never take the server down
+            log.exception("replay of live session %s failed", self.key)
+            await self.send_json(_error("replay-failed", "the replay stopped"))
+
+
+def _flat(points: Any) -> list[float]:
+    return [round(float(v), 1) for v in points.reshape(-1)]

@@ -1,0 +1,92 @@
+"""The live app's door to the rest: sessions, the exercise model, the upload service."""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+from typing import Any
+
+from django.db import transaction
+from django.db.models import QuerySet
+from django.utils import timezone
+
+from analysis.bvh import Motion, read
+from analysis.pipeline import FittedModel
+from webapp.accounts.models import User
+from webapp.exercises.models import Exercise
+from webapp.live.models import LiveSession, LiveStatus
+from webapp.patients.models import Patient
+from webapp.recordings.models import Recording
+from webapp.recordings.storage import read_verified
+from webapp.recordings.uploads import MIN_FRAMES, ParsedUpload, store_recording
+
+
+def visible_sessions(user: User) -> QuerySet[LiveSession]:
+    """Live sessions of the user's clinic (a patient: only their own)."""
+    if not user.is_authenticated or user.clinic_id is None:
+        return LiveSession.objects.none()
+    sessions = LiveSession.objects.filter(clinic_id=user.clinic_id)
+    if user.is_patient:
+        return sessions.filter(patient__user=user)
+    return sessions
+
+
+def session_for(user: User, pk: Any) -> LiveSession | None:
+    try:
+        return visible_sessions(user).select_related("exercise", "patient").get(pk=pk)
+    except (LiveSession.DoesNotExist, ValueError):
+        return None
+
+
+def create_session(
+    *, patient: Patient, exercise: Exercise, user: User, replay_of: Recording | None = None
+) -> LiveSession:
+    return LiveSession.objects.create(
+        clinic=patient.clinic, patient=patient, exercise=exercise, created_by=user,
+        replay_of=replay_of,
+    )  # fmt: skip
+
+
+def exercise_model(exercise: Exercise) -> FittedModel:
+    """The exercise's active model (built now, from the tutor, if it has none yet)."""
+    from workers.exercise_models import active_model
+
+    return active_model(exercise)[1]
+
+
+def mark_live(live: LiveSession) -> None:
+    LiveSession.objects.filter(pk=live.pk, status=LiveStatus.OPEN).update(status=LiveStatus.LIVE)
+
+
+def store_frames(live: LiveSession, bvh_text: str | None, user: User | None) -> Recording | None:
+    """The streamed frames as a Recording through the upload service (so the normal pipeline
+    analyses it); None for a replay or too few frames."""
+    if live.replay_of_id is not None:
+        return live.replay_of
+    if bvh_text is None:
+        return None
+    content = gzip.compress(bvh_text.encode(), mtime=0)
+    motion = read(content)
+    if motion.n_frames < MIN_FRAMES:
+        return None
+    name = f"live-{timezone.localtime(live.created_at):%Y%m%d-%H%M%S}.bvh.gz"
+    parsed = ParsedUpload(content, hashlib.sha256(content).hexdigest(), motion, name)
+    recording, _ = store_recording(
+        parsed, patient=live.patient, exercise=live.exercise, user=user or live.created_by,
+        note="Recorded in a live session.",
+    )  # fmt: skip
+    return recording
+
+
+def finish(live: LiveSession, summary: dict[str, Any], recording: Recording | None) -> None:
+    with transaction.atomic():
+        LiveSession.objects.filter(pk=live.pk).update(
+            status=LiveStatus.ENDED, ended_at=timezone.now(), summary=summary,
+            recording=recording,
+        )  # fmt: skip
+
+
+def replay_motion(live: LiveSession) -> Motion:
+    """The stored recording a replay session streams."""
+    assert live.replay_of is not None
+    return read(read_verified(live.replay_of))

@@ -1,0 +1,70 @@
+"""The live page (a therapist watching, or the patient), its status JSON, and "replay as live"."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from django.contrib.auth.decorators import login_required
+from django.http import Http404, HttpRequest, HttpResponse, JsonResponse
+from django.shortcuts import redirect, render
+from django.views.decorators.cache import never_cache
+from django.views.decorators.http import require_POST
+
+from webapp.accounts.permissions import get_recording_for_user
+from webapp.live import services
+from webapp.live.models import LiveSession
+from webapp.recordings.models import AnalysisRun, RunStatus
+
+
+def _session(request: HttpRequest, pk: Any) -> LiveSession:
+    live = services.session_for(request.user, pk)
+    if live is None:
+        raise Http404("No such live session.")
+    return live
+
+
+@login_required
+def page(request: HttpRequest, pk: Any) -> HttpResponse:
+    live = _session(request, pk)
+    return render(request, "live/page.html", {"live": live})
+
+
+@never_cache
+@login_required
+def status(request: HttpRequest, pk: Any) -> JsonResponse:
+    """The session's state and, once the stored recording is analysed, the offline figures."""
+    live = _session(request, pk)
+    body: dict[str, Any] = {"status": live.status, "summary": live.summary, "offline": None}
+    if live.recording_id is not None:
+        run = AnalysisRun.objects.filter(recording_id=live.recording_id).order_by("-created_at")
+        body["recording"] = str(live.recording_id)
+        body["offline"] = offline_figures(run.first())
+    return JsonResponse(body)
+
+
+def offline_figures(run: AnalysisRun | None) -> dict[str, Any] | None:
+    """The figures the live page shows beside its own: repetitions, scores, overall score."""
+    if run is None:
+        return None
+    out: dict[str, Any] = {"status": run.status, "progress": run.progress}
+    if run.status == RunStatus.SUCCEEDED:
+        reps = run.summary.get("repetitions", [])
+        out["repetitions"] = [
+            {"start": r.get("start"), "end": r.get("end"), "score": r.get("score")} for r in reps
+        ]
+        out["score"] = run.summary.get("score")
+    return out
+
+
+@login_required
+@require_POST
+def replay(request: HttpRequest, pk: Any) -> HttpResponse:
+    """Stream a stored recording through the live path (a new replay session)."""
+    recording = get_recording_for_user(request, pk)
+    if recording.exercise is None:
+        raise Http404("The recording has no exercise to align with.")
+    live = services.create_session(
+        patient=recording.patient, exercise=recording.exercise, user=request.user,
+        replay_of=recording,
+    )  # fmt: skip
+    return redirect("live:page", pk=live.pk)

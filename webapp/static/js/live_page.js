@@ -1,0 +1,96 @@
+// The live page: follows a live session's WebSocket, draws the patient and the tutor (kept in
+// step by the server's forward-plotting aligner) with the recording page's viewer, counts
+// repetitions, shows (and optionally speaks) guidance, and the live beside the offline figures.
+import { Playback } from "./viewer.js";
+
+const $ = (id) => document.getElementById(id);
+const root = $("live");
+let viewer = null;
+let errors = 0;
+const rows = new Map();
+
+function pose(event) {
+  const n = event.parents.length;
+  if (!viewer) {
+    const meta = {
+      frames: 1, joints: n, fps: 30, parents: event.parents, names: event.parents.map(String),
+      skeletons: [{ key: "patient", label: "patient" }, { key: "tutor", label: "tutor" }],
+    };
+    const first = new Float32Array(2 * n * 3);
+    first.set(event.patient, 0);
+    first.set(event.tutor, n * 3);
+    viewer = new Playback(root, meta, first); // the camera fits the first poses
+    viewer.sideBySide = true;
+    viewer.visible = [true, true];
+  }
+  viewer.positions.set(event.patient, 0);
+  viewer.positions.set(event.tutor, n * 3);
+  viewer.setFrame(0);
+}
+
+function say(text) {
+  if (!text) return;
+  $("guidance").textContent = text;
+  if ($("speak").checked && "speechSynthesis" in window) {
+    window.speechSynthesis.speak(new SpeechSynthesisUtterance(text));
+  }
+}
+
+function repetition(event) {
+  const tips = event.guidance.map((g) => g.type).join(", ") || "–";
+  const tr = document.createElement("tr");
+  tr.innerHTML = `<td>${event.index + 1}</td><td>${event.start}–${event.end}</td>` +
+    `<td>${event.score.toFixed(1)}</td><td>${tips}</td><td class="offline">…</td>`;
+  $("reps").append(tr);
+  rows.set(event.index, tr);
+  $("rep-count").textContent = event.index + 1;
+  say(event.guidance.length ? event.guidance[0].text : `Repetition ${event.index + 1}: well done.`);
+}
+
+function position(event) {
+  $("frame").textContent = event.frame;
+  $("tutor-frame").textContent = event.tutor_frame;
+  $("latency").textContent = event.latency_ms.toFixed(1);
+  $("live-state").textContent = "Live";
+  if (event.patient) pose(event);
+}
+
+function summary(event) {
+  $("live-state").textContent = "Ended";
+  $("rep-count").textContent = event.repetitions;
+  $("summary").textContent = `Live: ${event.repetitions} repetitions, ${event.frames} frames, ` +
+    `latency p95 ${event.latency_ms_p95} ms` + (event.dropped ? `, ${event.dropped} frames dropped` : "");
+  pollOffline();
+}
+
+async function pollOffline() {
+  const body = await fetch(root.dataset.statusUrl).then((r) => r.json());
+  const offline = body.offline;
+  if (!offline) return;
+  if (offline.status !== "succeeded") {
+    $("offline").textContent = `Offline analysis: ${offline.status} (${offline.progress} %)`;
+    if (offline.status !== "failed") setTimeout(pollOffline, 2000);
+    return;
+  }
+  $("offline").innerHTML = `Offline analysis: ${offline.repetitions.length} repetitions, score ` +
+    `${offline.score} (<a href="${root.dataset.recordingBase}${body.recording}/">recording</a>)`;
+  offline.repetitions.forEach((rep, i) => {
+    const tr = rows.get(i);
+    if (tr) tr.querySelector(".offline").textContent = rep.score.toFixed(1);
+  });
+}
+
+const HANDLERS = { position, repetition, summary, ready: () => {},
+  error: (e) => { errors += 1; $("errors").textContent = errors; console.warn(e.message); } };
+
+function connect() {
+  const scheme = location.protocol === "https:" ? "wss" : "ws";
+  const socket = new WebSocket(`${scheme}://${location.host}${root.dataset.ws}`);
+  socket.onmessage = (message) => {
+    const event = JSON.parse(message.data);
+    (HANDLERS[event.event] || (() => {}))(event);
+  };
+  socket.onclose = (e) => { if (e.code !== 4403 && $("live-state").textContent !== "Ended") setTimeout(connect, 1000); };
+}
+
+connect();
