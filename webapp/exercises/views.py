@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import hashlib
+import uuid
 
 from django.contrib import messages
 from django.contrib.auth.decorators import login_required
@@ -12,7 +13,8 @@ from django.views.decorators.http import require_POST
 from webapp.accounts.permissions import get_exercise_for_user, require_staff, visible_exercises
 from webapp.exercises import services
 from webapp.exercises.forms import ExerciseForm
-from webapp.exercises.models import Exercise
+from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
+from webapp.exercises.training_report import training_report
 
 
 @login_required
@@ -55,7 +57,20 @@ def save_new_exercise(form: ExerciseForm, clinic) -> Exercise:
 def exercise_detail(request: HttpRequest, pk) -> HttpResponse:
     exercise = get_exercise_for_user(request, pk)
     context = {"exercise": exercise, "versions": exercise.models.all()[:20]}
+    row = shown_model(exercise, request.GET.get("model"))
+    if row is not None:
+        context.update(model=row, report=training_report(row))
     return render(request, "exercises/detail.html", context)
+
+
+def shown_model(exercise: Exercise, wanted: str | None) -> ExerciseModel | None:
+    """The ready model whose training report the page shows: ?model=ID, else the active one."""
+    ready = exercise.models.filter(status=ModelStatus.READY).select_related("exercise")
+    try:
+        uuid.UUID(str(wanted))
+    except ValueError:
+        return ready.filter(pk=exercise.active_model_id).first()
+    return ready.filter(pk=wanted).first()
 
 
 @login_required

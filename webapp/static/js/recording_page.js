@@ -2,7 +2,22 @@
 // repetitions, key poses and feedback captions, and the Plotly charts linked to playback.
 import { Playback, SKELETON_COLOURS } from "./viewer.js";
 
-const TYPE_COLOURS = ["#0969da", "#bf3989", "#1a7f37", "#9a6700", "#8250df", "#cf222e"];
+// Paper 001's guidance types in the words the therapist reads (as webapp/reports/timeline.py).
+const GUIDANCE_WORDS = { "too fast": "too fast", "too slow": "too slow", overdone: "went too far", incomplete: "did not reach far enough" };
+const guidanceWords = (type) => GUIDANCE_WORDS[type] ?? String(type).replaceAll("_", " ");
+// Rig joint names in plain words, as analysis.feedback.text.joint_label: "LeftUpLeg" -> "left thigh".
+const PLAIN_WORDS = { "up leg": "thigh", "upper leg": "thigh", "fore arm": "forearm", collar: "collarbone", "toe base": "toes" };
+function plainJoint(name) {
+  const words = (String(name).split(/[:|]/).pop().match(/[A-Z]+(?=[A-Z][a-z])|[A-Z]?[a-z]+|[A-Z]+|[0-9]+/g) || []).map((w) => w.toLowerCase());
+  const sides = { left: "left", l: "left", right: "right", r: "right" };
+  let side = "";
+  if (words.length > 1 && sides[words[0]]) side = sides[words.shift()];
+  else if (words.length > 1 && sides[words[words.length - 1]]) side = sides[words.pop()];
+  let body = words.join(" ");
+  for (const [from, to] of Object.entries(PLAIN_WORDS)) body = body.replace(new RegExp(`\\b${from}\\b`), to);
+  return (side ? `${side} ${body}` : body) || String(name).toLowerCase();
+}
+const SKELETON_WORDS = { patient: "patient", tutor: "reference", tutor_adjusted: "reference, matched in time" };
 const hex = (n) => "#" + n.toString(16).padStart(6, "0");
 const $ = (id) => document.getElementById(id);
 
@@ -40,7 +55,8 @@ function addControls(playback) {
   $("speed").addEventListener("change", (e) => { playback.speed = Number(e.target.value); });
   $("side-by-side").addEventListener("change", (e) => { playback.sideBySide = e.target.checked; playback.setFrame(playback.frame); });
   const loop = $("loop");
-  playback.meta.repetitions.forEach((rep, i) => loop.add(new Option(`#${i + 1} (${rep.start}–${rep.end})`, i)));
+  const secs = (f) => (f / playback.meta.fps).toFixed(1);
+  playback.meta.repetitions.forEach((rep, i) => loop.add(new Option(`#${i + 1} (${secs(rep.start)}–${secs(rep.end)} s)`, i)));
   loop.addEventListener("change", () => {
     const rep = playback.meta.repetitions[loop.value];
     playback.loop = rep ? [rep.start, rep.end] : null;
@@ -59,31 +75,24 @@ function addControls(playback) {
 }
 
 function addTimeline(playback) {
+  // Repetitions, guidance and the key-pose layers are drawn by the server (timeline.html);
+  // here every marker jumps to its frame, and a click elsewhere seeks.
   const line = $("timeline");
   const at = (frame) => `${(100 * frame) / Math.max(1, playback.nFrames - 1)}%`;
-  playback.meta.repetitions.forEach((rep, i) => {
-    const bar = document.createElement("div");
-    bar.className = "rep";
-    bar.title = `Repetition ${i + 1}: score ${Math.round(rep.score ?? 0)}`;
-    Object.assign(bar.style, { position: "absolute", left: at(rep.start), width: `calc(${at(rep.end)} - ${at(rep.start)})`, top: "4px", height: "14px", background: "#c8d7ea", borderRadius: "3px" });
-    line.append(bar);
-  });
-  playback.meta.landmarks.forEach((mark) => {
-    const button = document.createElement("button");
-    button.type = "button";
-    button.className = "landmark";
-    button.dataset.frame = mark.frame;
-    button.title = `${mark.name} · frame ${mark.frame}`;
-    Object.assign(button.style, { position: "absolute", left: at(mark.frame), top: "24px", width: "10px", height: "18px", marginLeft: "-5px", padding: 0, border: 0, borderRadius: "2px", cursor: "pointer", background: TYPE_COLOURS[(mark.type - 1 + TYPE_COLOURS.length) % TYPE_COLOURS.length] });
-    button.addEventListener("click", () => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(mark.frame); });
-    line.append(button);
+  line.querySelectorAll("[data-frame]").forEach((mark) => {
+    mark.addEventListener("click", (e) => {
+      e.stopPropagation();
+      playback.playing = false;
+      $("play").textContent = "Play";
+      playback.setFrame(Number(mark.dataset.frame));
+    });
   });
   const cursor = document.createElement("div");
   cursor.id = "timeline-cursor";
-  Object.assign(cursor.style, { position: "absolute", top: 0, bottom: 0, width: "2px", background: "#cf222e", left: "0%" });
+  Object.assign(cursor.style, { position: "absolute", top: 0, bottom: 0, width: "2px", background: "#cf222e", left: "0%", pointerEvents: "none" });
   line.append(cursor);
   line.addEventListener("click", (e) => {
-    if (e.target !== line) return;
+    if (e.target.closest("[data-frame]")) return;
     const box = line.getBoundingClientRect();
     playback.setFrame(((e.clientX - box.left) / box.width) * (playback.nFrames - 1));
   });
@@ -117,17 +126,17 @@ function charts(playback) {
   // Three joints shown at first (the rest one click away in the legend) keep the chart readable.
   const joints = [...new Set(meta.angles.series.map((s) => s.joint))];
   const traces = meta.angles.series.map((s) => ({
-    x, y: s.values, name: `${s.joint} · ${s.skeleton}`, mode: "lines",
+    x, y: s.values, name: `${plainJoint(s.joint)} · ${SKELETON_WORDS[s.skeleton] ?? s.skeleton}`, mode: "lines",
     line: { dash: s.skeleton === "patient" ? "solid" : "dot" },
     visible: joints.indexOf(s.joint) < 3 ? true : "legendonly",
   }));
   const marks = meta.landmarks.map((m) => ({ type: "line", xref: "x", yref: "paper", x0: seconds(m.frame), x1: seconds(m.frame), y0: 0, y1: 1, line: { color: "#bbb", width: 1, dash: "dot" } }));
-  const layout = { margin: { t: 10, r: 10, b: 40, l: 45 }, xaxis: { title: "time (s)" }, yaxis: { title: "angle (°)" }, shapes: marks, legend: { orientation: "h" } };
+  const layout = { margin: { t: 10, r: 10, b: 40, l: 45 }, xaxis: { title: { text: "time (s)" } }, yaxis: { title: { text: "angle (°)" } }, shapes: marks, legend: { orientation: "h" } };
   const chart = $("chart-angles");
   Plotly.newPlot(chart, traces, layout, { displaylogo: false, responsive: true });
   chart.on("plotly_click", (e) => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(e.points[0].x * meta.fps); });
   const reps = meta.repetitions;
-  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => (r.guidance || []).map((g) => g.type).join(", ")), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 30, l: 40 }, yaxis: { range: [0, 100], title: "score" } }, { displaylogo: false, responsive: true });
+  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => (r.guidance || []).map((g) => guidanceWords(g.type)).join(", ")), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 40, l: 50 }, xaxis: { title: { text: "repetition" }, type: "category" }, yaxis: { range: [0, 100], title: { text: "score (0–100)" } } }, { displaylogo: false, responsive: true });
   // The time cursor is a positioned overlay, not a Plotly shape: relayout is too slow to run
   // at the animation rate.
   const cursor = document.createElement("div");

@@ -1,0 +1,163 @@
+"""The timeline of one analysed recording, in plain words and seconds, for the page and the PDF.
+
+Three key-pose layers (as found by the classifier, moved or chosen by refining, removed or added
+by the order check of periodic landmark sequence analysis), the repetitions with pass/fail against
+the threshold of the run, and the guidance of each repetition with the stretch it applies to.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from analysis.pipeline import AnalysisSummary
+from analysis.pipeline.results import RepetitionResult
+
+# Paper 001's guidance types as the therapist reads them.
+GUIDANCE_WORDS = {
+    "too fast": "too fast",
+    "too slow": "too slow",
+    "overdone": "went too far",
+    "incomplete": "did not reach far enough",
+}
+LAYERS = (
+    ("identified", "key poses as found"),
+    ("refined", "key poses moved by refining"),
+    ("periodic", "removed or added by the order check"),
+)
+FALLBACK_NOTE = (
+    "The key poses did not form a repeating cycle, so the repetitions were cut from the "
+    "movement's main direction instead."
+)
+
+
+def guidance_words(kind: str) -> str:
+    return GUIDANCE_WORDS.get(kind, kind.replace("_", " "))
+
+
+def seconds(frame: int, fps: float) -> float:
+    return round(frame / fps, 2) if fps > 0 else float(frame)
+
+
+def verdict(rep: RepetitionResult, threshold: float, stored_passed: bool | None) -> str:
+    """'passed (score 74, needs 50)'; runs that stored no verdict are judged by the score."""
+    passed = rep.score >= threshold if stored_passed is None else stored_passed
+    return f"{'passed' if passed else 'not passed'} (score {rep.score:.0f}, needs {threshold:.0f})"
+
+
+class _Scale:
+    def __init__(self, frames: int, fps: float) -> None:
+        self.frames, self.fps = max(frames, 1), fps
+
+    def at(self, frame: int) -> float:
+        """Position along the timeline, percent."""
+        return round(100.0 * min(max(frame, 0), self.frames - 1) / max(self.frames - 1, 1), 3)
+
+    def mark(self, frame: int, **extra: Any) -> dict[str, Any]:
+        return {
+            "frame": frame,
+            "seconds": seconds(frame, self.fps),
+            "left": self.at(frame),
+            **extra,
+        }
+
+    def span(self, first: int, last: int, **extra: Any) -> dict[str, Any]:
+        return {
+            "first": first,
+            "last": last,
+            "first_s": seconds(first, self.fps),
+            "last_s": seconds(last, self.fps),
+            "left": self.at(first),
+            "width": max(round(self.at(last) - self.at(first), 3), 0.6),
+            **extra,
+        }
+
+
+def ticks(scale: _Scale) -> list[dict[str, Any]]:
+    """Round times along the axis (about eight), seconds and percent."""
+    duration = (scale.frames - 1) / scale.fps if scale.fps > 0 else 0.0
+    if duration <= 0:
+        return []
+    raw = duration / 8
+    power = 10 ** math.floor(math.log10(raw))
+    step = next(m * power for m in (1, 2, 5, 10) if m * power >= raw)
+    return [
+        {
+            "seconds": round(k * step, 3),
+            "label": f"{round(k * step, 3):g}",
+            "left": round(100.0 * k * step / duration, 3),
+        }
+        for k in range(int(duration / step + 1e-9) + 1)
+    ]
+
+
+def repetitions(
+    result: AnalysisSummary, scale: _Scale, stored: list[Mapping[str, Any]]
+) -> list[dict[str, Any]]:
+    rows = []
+    for i, rep in enumerate(result.repetitions):
+        raw = stored[i] if i < len(stored) else {}
+        passed = bool(raw["passed"]) if "passed" in raw else None
+        text = verdict(rep, result.pass_threshold, passed)
+        guidance = [
+            scale.span(*g.frames, label=guidance_words(g.type), number=i + 1) for g in rep.guidance
+        ]
+        rows.append(
+            scale.span(
+                rep.start,
+                rep.end,
+                number=i + 1,
+                score=round(rep.score),
+                passed=text.startswith("passed"),
+                verdict=text,
+                guidance=guidance,
+            )
+        )
+    return rows
+
+
+def timeline(
+    result: AnalysisSummary,
+    type_names: Mapping[str, str],
+    stored: Mapping[str, Any] | None = None,
+    fallback_frames: int = 0,
+) -> dict[str, Any]:
+    """Everything the timeline shows; ``stored``: the run's raw summary (tells old runs apart)."""
+    raw = dict(stored or {})
+    scale = _Scale(result.frames or fallback_frames, result.fps)
+
+    def pose(mark: Any) -> dict[str, Any]:
+        name = type_names.get(str(mark.type), f"key pose {mark.type}")
+        return scale.mark(mark.frame, name=name, type=mark.type)
+
+    by_origin = {
+        origin: [pose(m) for m in result.landmarks if m.origin == origin]
+        for origin in ("identified", "refined", "inserted")
+    }
+    inserted_frames = {m["frame"] for m in by_origin["inserted"]}
+    inserted = by_origin["inserted"] + [
+        scale.mark(f, name="added key pose", type=0)
+        for f in result.periodic.inserted
+        if f not in inserted_frames
+    ]
+    return {
+        "frames": scale.frames,
+        "fps": result.fps,
+        "duration_s": seconds(scale.frames - 1, result.fps),
+        "layers": [{"key": key, "label": label} for key, label in LAYERS],
+        "identified": by_origin["identified"],
+        "refined": by_origin["refined"],
+        "removed": [
+            scale.mark(f, name="removed key pose", type=0) for f in result.periodic.removed
+        ],
+        "inserted": inserted,
+        "candidates": result.periodic.candidates,
+        "ticks": ticks(scale),
+        "threshold": round(result.pass_threshold),
+        "repetitions": repetitions(result, scale, list(raw.get("repetitions") or [])),
+        # Older runs stored no segmentation: only an explicit "fallback" earns the note.
+        "fallback": raw.get("segmentation", result.segmentation if stored is None else "")
+        == "fallback",
+        "fallback_note": FALLBACK_NOTE,
+    }
