@@ -144,3 +144,38 @@ def test_norms_cover_every_angle():
     assert norm_for("knee_flexion").percent_of_maximum(67.5) == pytest.approx(50.0)
     with pytest.raises(KeyError):
         norm_for("wrist_flexion_left")
+
+
+def test_plain_words_and_regions():
+    from analysis.clinical.labels import angle_groups, angle_label
+
+    assert angle_label("knee_flexion_left") == "Left knee flexion"
+    assert angle_label("shoulder_abduction_right") == "Right shoulder abduction"
+    assert angle_label("trunk_flexion") == "Trunk flexion"
+    assert all("_" not in angle_label(name) for name in ANGLE_NAMES)
+    angles = {"trunk_flexion": AngleRange(0, 20), "knee_flexion_right": AngleRange(5, 95),
+              "knee_flexion_left": AngleRange(3, 90)}  # fmt: skip
+    groups = angle_groups(angles, involved_joints=["KneeLeft", "KneeRight"])
+    assert [g["region"] for g in groups] == ["Knees", "Trunk"]  # the moved region first
+    assert groups[0]["involved"] and not groups[1]["involved"]
+    knee = groups[0]["rows"][0]
+    assert (knee["label"], knee["range"], knee["norm_min"], knee["norm_max"]) == (
+        "Left knee flexion", 87.0, 0.0, 135.0,
+    )  # fmt: skip
+
+
+def test_repetitions_carry_their_own_ranges_in_tenths_of_a_degree():
+    from analysis.clinical.stored import repetition_angles
+    from analysis.pipeline.results import RepetitionResult
+
+    series = {"knee_flexion_left": np.array([0.04, 10.0, 90.06, 40.0, 20.0, 5.0])}
+    reps = (RepetitionResult(0, 2, 1, 80.0), RepetitionResult(3, 5, 4, 70.0))
+    first, second = repetition_angles(series, reps)
+    assert first.clinical_angles == {"knee_flexion_left": AngleRange(0.0, 90.1)}
+    assert second.clinical_angles == {"knee_flexion_left": AngleRange(5.0, 40.0)}
+    assert first.to_json()["clinical_angles"] == {"knee_flexion_left": [0.0, 90.1]}  # compact
+    assert RepetitionResult.from_json(first.to_json()) == first
+    as_objects = {**first.to_json(), "clinical_angles": {"knee_flexion_left": {"min": 0, "max": 9}}}
+    assert RepetitionResult.from_json(as_objects).clinical_angles["knee_flexion_left"].range == 9
+    assert "clinical_angles" not in reps[0].to_json()  # absent when not measured: small JSON
+    assert RepetitionResult.from_json(reps[0].to_json()).clinical_angles == {}

@@ -99,3 +99,57 @@ def test_ui_prmd_shoulder_abduction_covers_more_than_a_squat():
     squat = reachable_workspace(read(UI_PRMD / "m01_s01_correct.bvh.gz"))
     assert max(w.relative_area for w in raise_arm.values()) > 0.1
     assert max(w.relative_area for w in squat.values()) < 0.1
+
+
+def _swept_right_arm() -> list[dict]:
+    directions = cap(np.array([0.0, 0.0, 1.0]), 45.0, n_rings=6, n_around=40)
+    rest = np.array([-1.0, 0.0, 0.0])
+    return [
+        {
+            "RightUpperArm": _about(
+                np.cross(rest, d), np.degrees(np.arccos(np.clip(rest @ d, -1, 1)))
+            )
+        }
+        for d in directions
+        if np.linalg.norm(np.cross(rest, d)) > 1e-9
+    ]
+
+
+def test_stored_workspace_only_for_exercises_of_the_arms():
+    """The pipeline's workspace stage: per hand the areas and a small hull, for arm exercises."""
+    from analysis.clinical.stored import MAX_HULL_VERTICES, workspace_summaries
+    from analysis.pipeline.results import AnalysisSummary
+
+    motion = posed(_swept_right_arm())
+    assert workspace_summaries(motion, ["KneeLeft", "HipLeft", "Spine"]) == {}  # a squat
+    stored = workspace_summaries(motion, ["ShoulderRight", "ElbowRight"])
+    full = reachable_workspace(motion)
+    assert set(stored) == {"left", "right"}
+    right = stored["right"]
+    assert right.relative_area == pytest.approx(full["right"].relative_area, abs=1e-4)
+    assert right.quadrants == pytest.approx(full["right"].quadrants, abs=1e-4)
+    assert 4 <= len(right.vertices) <= MAX_HULL_VERTICES
+    assert 3 * len(right.vertices) + 3 * len(right.faces) <= 400  # a few hundred numbers
+    assert max(max(f) for f in right.faces) < len(right.vertices)
+    summary = AnalysisSummary(1, 30.0, (), (), 0.0, workspace=stored)
+    again = AnalysisSummary.from_json(summary.to_json())
+    assert again.workspace == stored
+    assert AnalysisSummary.from_json({}).workspace == {}  # runs stored before the field
+
+
+@pytest.mark.parametrize("joints", [["LeftArm"], ["RightForeArm"], ["WristLeft"], ["RHand"]])
+def test_arm_joints_of_any_rig_count_as_an_arm_exercise(joints):
+    from analysis.clinical.labels import involves_arms
+
+    assert involves_arms(joints)
+    assert not involves_arms(["LeftUpLeg", "KneeRight", "Waist"])
+
+
+def test_a_squat_that_moves_the_arms_is_not_an_arm_exercise():
+    """The joints the UI-PRMD deep squat's tutor moves (m01) and the shoulder abduction's (m07)."""
+    from analysis.clinical.labels import involves_arms
+
+    squat = ["Head", "LeftCollar", "LeftUpperArm", "RightForearm", "LeftUpperLeg",
+             "LeftLowerLeg", "LeftFoot", "RightUpperLeg", "RightLowerLeg", "RightFoot"]  # fmt: skip
+    assert not involves_arms(squat)
+    assert involves_arms(["RightCollar", "RightUpperArm", "RightForearm", "RightHand"])

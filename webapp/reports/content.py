@@ -9,6 +9,8 @@ from django.utils import timezone
 
 from webapp.patients.progress import patient_progress
 from webapp.reports import playback
+from webapp.reports.clinical import clinical_content
+from webapp.reports.timeline import timeline
 
 MAX_POSES = 4
 
@@ -32,6 +34,27 @@ def key_poses(run) -> tuple[list, list[int]]:
     return poses, [int(p) for p in arrays["parents"]]
 
 
+def guidance_text(rep: dict[str, Any]) -> str:
+    return "; ".join(
+        f"{g['label']} ({g['first_s']:.1f}–{g['last_s']:.1f} s)" for g in rep["guidance"]
+    )
+
+
+def repetition_content(run, recording) -> dict[str, Any]:
+    """The repetition table (times in seconds, pass/fail, guidance) and the timeline's layers."""
+    names = recording.exercise.landmark_type_names if recording.exercise else {}
+    line = timeline(
+        run.result, {str(k): str(v) for k, v in (names or {}).items()}, run.summary,
+        fallback_frames=recording.n_frames or 0,
+    )  # fmt: skip
+    rows = [
+        [r["number"], f"{r['first_s']:.1f}–{r['last_s']:.1f}", r["score"], r["verdict"],
+         guidance_text(r) or "none"]
+        for r in line["repetitions"]
+    ]  # fmt: skip
+    return {"repetitions": rows, "timeline": line}
+
+
 def recording_content(recording) -> dict[str, Any]:
     run = recording.latest_succeeded_run()
     exercise = recording.exercise.name if recording.exercise else "no exercise"
@@ -49,11 +72,9 @@ def recording_content(recording) -> dict[str, Any]:
         return content
     result = run.result
     content["score"] = fmt(result.score)
-    content["repetitions"] = [
-        [i + 1, f"{r.start}–{r.end}", fmt(r.score), ", ".join(g.type for g in r.guidance)]
-        for i, r in enumerate(result.repetitions)
-    ]
+    content.update(repetition_content(run, recording))
     content["feedback"] = [comment.text for comment in result.feedback]
+    content.update(clinical_content(result, recording.exercise))
     content["rom"] = [
         [joint, fmt(value, 1), fmt(result.gamma.get(joint), 2)]
         for joint, value in result.range_of_motion.items()

@@ -19,6 +19,9 @@ from reportlab.lib.styles import getSampleStyleSheet
 from reportlab.lib.units import cm
 from reportlab.platypus import Paragraph, SimpleDocTemplate, Spacer, Table, TableStyle
 
+from webapp.reports.clinical import clinical_flowables
+from webapp.reports.pdf_timeline import timeline_drawing
+
 STYLES = getSampleStyleSheet()
 GRID = TableStyle(
     [
@@ -35,8 +38,15 @@ def paragraph(text: str, style: str = "BodyText") -> Paragraph:
     return Paragraph(escaped, STYLES[style])
 
 
+def small(text: str) -> Paragraph:
+    """A table cell that wraps (9 pt, as the grid's text)."""
+    escaped = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return Paragraph(f'<font size="9">{escaped}</font>', STYLES["BodyText"])
+
+
 def table(rows: list[list[Any]], widths: list[float] | None = None) -> Table:
-    t = Table([[str(c) for c in row] for row in rows], colWidths=widths, repeatRows=1)
+    cells = [[c if isinstance(c, Paragraph) else str(c) for c in row] for row in rows]
+    t = Table(cells, colWidths=widths, repeatRows=1)
     t.setStyle(GRID)
     return t
 
@@ -119,10 +129,23 @@ def recording_pdf(content: dict[str, Any]) -> bytes:
         return build(story, content["title"])
     story.append(paragraph(f"Score {content['score']} / 100", "Heading2"))
     reps = content["repetitions"]
-    story.append(table([["#", "Frames", "Score", "Guidance"], *reps]))
     story.append(
-        bar_chart([float(r[2]) for r in reps], [str(r[0]) for r in reps], "Score per repetition")
-    )
+        table([["#", "Time (s)", "Score (0–100)", "Result", "Guidance"],
+               *[[*r[:3], small(r[3]), small(r[4])] for r in reps]],
+              widths=[0.8 * cm, 2.2 * cm, 2.4 * cm, 5 * cm, 6.6 * cm])
+    )  # fmt: skip
+    line = content.get("timeline")
+    if line:
+        if line.get("fallback"):
+            story.append(paragraph(line["fallback_note"]))
+        story.append(Spacer(1, 0.2 * cm))
+        story.append(timeline_drawing(line))
+    story.append(
+        bar_chart(
+            [float(r[2]) for r in reps], [str(r[0]) for r in reps],
+            "Score per repetition (0–100)",
+        )
+    )  # fmt: skip
     story.append(paragraph("Feedback", "Heading2"))
     story += [paragraph(f"• {text}") for text in content["feedback"]] or [paragraph("No remarks.")]
     if content.get("poses"):
@@ -131,6 +154,7 @@ def recording_pdf(content: dict[str, Any]) -> bytes:
     if content.get("rom"):
         story.append(paragraph("Range of motion (degrees)", "Heading2"))
         story.append(table([["Joint", "Range", "γ"], *content["rom"]]))
+    story += clinical_flowables(content)
     return build(story, content["title"])
 
 

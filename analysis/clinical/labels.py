@@ -1,0 +1,146 @@
+"""Clinical angles in plain words, grouped by body region, for pages and reports.
+
+``angle_label("knee_flexion_left")`` is "Left knee flexion"; `angle_groups` puts the angles of a
+result into regions (trunk, hips, knees, ankles, shoulders, elbows) beside their normal adult
+range, the regions the exercise moves first. `involves_arms` decides from an exercise's involved
+joint names whether it is an exercise of the upper limb (the reachable workspace is measured then).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any, Protocol
+
+from analysis.bvh.skeleton_map import normalise_name
+from analysis.clinical.body import _ROLE_BY_NAME
+from analysis.clinical.norms import norm_for
+
+# region title -> angle names without side, in the order a therapist reads them
+REGIONS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("Trunk", ("trunk_flexion", "trunk_lateral_flexion")),
+    ("Hips", ("hip_flexion", "hip_abduction")),
+    ("Knees", ("knee_flexion",)),
+    ("Ankles", ("ankle_dorsiflexion",)),
+    ("Shoulders", ("shoulder_flexion", "shoulder_abduction")),
+    ("Elbows", ("elbow_flexion",)),
+)
+MOTIONS = {
+    "trunk_flexion": "Trunk flexion",
+    "trunk_lateral_flexion": "Trunk side bending (to the right +)",
+    "hip_flexion": "hip flexion",
+    "hip_abduction": "hip abduction",
+    "knee_flexion": "knee flexion",
+    "ankle_dorsiflexion": "ankle dorsiflexion",
+    "shoulder_flexion": "shoulder flexion",
+    "shoulder_abduction": "shoulder abduction",
+    "elbow_flexion": "elbow flexion",
+}
+# body role of a joint (analysis.clinical.body) -> the region whose angles it moves
+_REGION_OF_ROLE = {
+    "pelvis": "Trunk", "spine": "Trunk", "chest": "Trunk", "neck": "Trunk",
+    "hip": "Hips", "knee": "Knees", "ankle": "Ankles", "toe": "Ankles",
+    "collar": "Shoulders", "shoulder": "Shoulders", "elbow": "Elbows", "wrist": "Elbows",
+}  # fmt: skip
+ARM_WORDS = ("shoulder", "elbow", "wrist", "hand", "arm")
+LEG_WORDS = ("leg", "thigh", "knee", "shin", "ankle", "foot", "toe")
+SIDE_WORDS = {"left": "Left", "right": "Right"}
+QUADRANT_LABELS = {
+    "upper_medial": "upper, towards the body",
+    "upper_lateral": "upper, away from the body",
+    "lower_medial": "lower, towards the body",
+    "lower_lateral": "lower, away from the body",
+}
+
+
+class RangeLike(Protocol):
+    @property
+    def min(self) -> float: ...
+
+    @property
+    def max(self) -> float: ...
+
+    @property
+    def range(self) -> float: ...
+
+
+def split_side(name: str) -> tuple[str, str]:
+    """("knee_flexion", "left") for "knee_flexion_left"; ("trunk_flexion", "") without a side."""
+    for side in SIDE_WORDS:
+        if name.endswith(f"_{side}"):
+            return name[: -len(side) - 1], side
+    return name, ""
+
+
+def angle_label(name: str) -> str:
+    """The plain-words name of a clinical angle: "Left knee flexion", "Trunk flexion"."""
+    base, side = split_side(name)
+    motion = MOTIONS.get(base, base.replace("_", " "))
+    return f"{SIDE_WORDS[side]} {motion}" if side else motion[:1].upper() + motion[1:]
+
+
+def region_of(name: str) -> str:
+    base, _ = split_side(name)
+    return next((title for title, names in REGIONS if base in names), "Other")
+
+
+def _role_base(joint: str) -> str:
+    role = _ROLE_BY_NAME.get(normalise_name(joint), "")
+    return split_side(role)[0]
+
+
+def involved_regions(joints: Iterable[str]) -> set[str]:
+    """Regions whose angles the named skeleton joints move (any rig's names)."""
+    return {_REGION_OF_ROLE[r] for r in map(_role_base, joints) if r in _REGION_OF_ROLE}
+
+
+def _is_arm(joint: str) -> bool:
+    name = normalise_name(joint)
+    return any(w in name for w in ARM_WORDS) or _role_base(joint) in ("shoulder", "elbow", "wrist")
+
+
+def _is_leg(joint: str) -> bool:
+    name = normalise_name(joint)
+    return any(w in name for w in LEG_WORDS) or _role_base(joint) in ("hip", "knee", "ankle", "toe")
+
+
+def involves_arms(joints: Iterable[str]) -> bool:
+    """Whether an exercise is one of the upper limb: its involved joints include arm joints
+    (shoulder, elbow, wrist, hand, by the rig's name or the body role the name maps to), more
+    of them than leg joints. A squat whose tutor swings the arms for balance is not one."""
+    joints = list(joints)
+    arms = sum(map(_is_arm, joints))
+    return arms > 0 and arms > sum(map(_is_leg, joints))
+
+
+def angle_row(name: str, angle: RangeLike) -> dict[str, Any]:
+    norm = norm_for(name)
+    return {
+        "name": name,
+        "label": angle_label(name),
+        "min": angle.min,
+        "max": angle.max,
+        "range": angle.range,
+        "norm_min": norm.minimum,
+        "norm_max": norm.maximum,
+        "norm_range": norm.range,
+        "percent_of_norm": round(100.0 * angle.range / norm.range) if norm.range else None,
+    }
+
+
+def angle_groups(
+    angles: Mapping[str, RangeLike], involved_joints: Iterable[str] = ()
+) -> list[dict[str, Any]]:
+    """The angles of a result by region: ``[{"region", "involved", "rows": [angle_row…]}]``,
+    regions the exercise moves first, then the others, each in `REGIONS` order."""
+    moved = involved_regions(involved_joints)
+    groups = []
+    for title, bases in REGIONS:
+        rows = [
+            angle_row(name, angles[name])
+            for base in bases
+            for name in (base, f"{base}_left", f"{base}_right")
+            if name in angles
+        ]
+        if rows:
+            groups.append({"region": title, "involved": title in moved, "rows": rows})
+    return sorted(groups, key=lambda g: not g["involved"])

@@ -1,0 +1,81 @@
+"""Clinical measures in the form the pipeline stores them: small and rounded.
+
+- `repetition_angles(series, repetitions)`: each repetition with its angle ranges (0.1°).
+- `workspace_summaries(motion, involved_joints)`: per hand, the reachable workspace (relative
+  area, total and per quadrant) and a hull decimated to at most `MAX_HULL_VERTICES` vertices,
+  only when the exercise involves an arm joint; ``{}`` otherwise.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from analysis.bvh import Motion
+from analysis.clinical.angles import angle_ranges
+from analysis.clinical.body import FloatArray
+from analysis.clinical.labels import involves_arms
+from analysis.clinical.workspace import Workspace, covered_patch, reachable_workspace
+
+if TYPE_CHECKING:  # the pipeline imports this module: its results are imported where used
+    from analysis.pipeline.results import AngleRange, RepetitionResult, WorkspaceSummary
+
+MAX_HULL_VERTICES = 32  # 96 coordinates and about 170 face indices per hand
+
+
+def rounded(angles: Mapping[str, AngleRange], digits: int = 1) -> dict[str, AngleRange]:
+    from analysis.pipeline.results import AngleRange
+
+    return {k: AngleRange(round(v.min, digits), round(v.max, digits)) for k, v in angles.items()}
+
+
+def repetition_angles(
+    series: Mapping[str, FloatArray], repetitions: Iterable[RepetitionResult]
+) -> tuple[RepetitionResult, ...]:
+    """The repetitions with ``clinical_angles``: each angle's range over the repetition's
+    frames (start..end inclusive), rounded to 0.1° to keep the stored summary small."""
+    return tuple(
+        replace(rep, clinical_angles=rounded(angle_ranges(dict(series), rep.start, rep.end)))
+        for rep in repetitions
+    )
+
+
+def farthest_points(points: FloatArray, count: int) -> FloatArray:
+    """``count`` of the points spread as far apart as possible (greedy, from the first)."""
+    if len(points) <= count:
+        return points
+    chosen = [0]
+    distance = np.linalg.norm(points - points[0], axis=1)
+    while len(chosen) < count:
+        chosen.append(int(np.argmax(distance)))
+        distance = np.minimum(distance, np.linalg.norm(points - points[chosen[-1]], axis=1))
+    return points[sorted(chosen)]
+
+
+def small_hull(ws: Workspace, max_vertices: int = MAX_HULL_VERTICES) -> WorkspaceSummary:
+    """The workspace with its hull decimated for display (areas are the full hull's)."""
+    from analysis.pipeline.results import WorkspaceSummary
+
+    vertices, faces = ws.vertices, ws.faces
+    if len(vertices) > max_vertices:
+        vertices, faces = covered_patch(farthest_points(vertices, max_vertices))
+    coords = np.round(np.asarray(vertices, dtype=np.float32).astype(np.float64), 3)
+    return WorkspaceSummary(
+        side=ws.side,
+        relative_area=round(float(ws.relative_area), 4),
+        quadrants={k: round(float(v), 4) for k, v in ws.quadrants.items()},
+        vertices=tuple((float(x), float(y), float(z)) for x, y, z in coords),
+        faces=tuple((int(a), int(b), int(c)) for a, b, c in faces),
+    )
+
+
+def workspace_summaries(
+    motion: Motion, involved_joints: Iterable[str]
+) -> dict[str, WorkspaceSummary]:
+    """Per hand the stored workspace, for exercises that involve an arm joint only."""
+    if not involves_arms(involved_joints):
+        return {}
+    return {side: small_hull(ws) for side, ws in reachable_workspace(motion).items()}
