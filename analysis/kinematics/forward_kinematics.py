@@ -10,6 +10,9 @@ that write 6 channels on every joint expect); other axes keep the OFFSET. Quater
 
 from __future__ import annotations
 
+import weakref
+from collections.abc import Callable
+
 import numba
 import numpy as np
 import numpy.typing as npt
@@ -70,8 +73,25 @@ def _euler_quaternions(
     return out
 
 
+# A pipeline run asks for the same motion's rotations and positions in several stages; a Motion
+# is immutable, so each is computed once per motion and handed out as a fresh copy (callers may
+# edit what they get).
+_MEMO: weakref.WeakKeyDictionary[Motion, dict[str, FloatArray]] = weakref.WeakKeyDictionary()
+
+
+def _memoised(motion: Motion, key: str, compute: Callable[[Motion], FloatArray]) -> FloatArray:
+    cached = _MEMO.setdefault(motion, {})
+    if key not in cached:
+        cached[key] = compute(motion)
+    return cached[key].copy()
+
+
 def rotations(motion: Motion) -> FloatArray:
     """Local joint rotations relative to the parent: (F, J, 4) unit quaternions (w, x, y, z)."""
+    return _memoised(motion, "rotations", _rotations)
+
+
+def _rotations(motion: Motion) -> FloatArray:
     columns, axes = _rotation_layout(motion.skeleton)
     return _euler_quaternions(np.ascontiguousarray(motion.frames), columns, axes)
 
@@ -198,6 +218,10 @@ def _translation_columns(skeleton: Skeleton) -> npt.NDArray[np.int64]:
 
 def positions(motion: Motion) -> FloatArray:
     """World positions of every joint: (F, J, 3), same units as the file."""
+    return _memoised(motion, "positions", _positions)
+
+
+def _positions(motion: Motion) -> FloatArray:
     skeleton = motion.skeleton
     _check_parent_order(skeleton)
     columns, axes = _rotation_layout(skeleton)

@@ -170,7 +170,11 @@ def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
         papers=papers,
     )
     report("done", 1.0)
-    summary = {"tutor_repetitions": len(reps), "labelled_repetitions": len(labelled)}
+    summary = {
+        "tutor_repetitions": len(reps),
+        "labelled_repetitions": len(labelled),
+        "involved_joints": list(involved),  # the joints the joint weights belong to, in order
+    }
     return components, involved, {**summary, "scorer": scorer.as_dict(), **papers.report()}
 
 

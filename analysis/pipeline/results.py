@@ -97,6 +97,8 @@ class RepetitionResult:
     gbdtw_score: float | None = None
     alignment_tau: float | None = None
     similarity: float | None = None
+    # anatomical name -> its range over this repetition (degrees, 0.1°); empty in older runs
+    clinical_angles: Mapping[str, AngleRange] = field(default_factory=dict)
 
     @property
     def main_guidance(self) -> str:
@@ -110,6 +112,7 @@ class RepetitionResult:
             "tempo": self.tempo, "guidance": [g.to_json() for g in self.guidance],
             "gbdtw_score": self.gbdtw_score, "alignment_tau": self.alignment_tau,
             "similarity": self.similarity,
+            **_angles_json(self.clinical_angles),
         }  # fmt: skip
 
     @classmethod
@@ -127,7 +130,27 @@ class RepetitionResult:
             gbdtw_score=_optional_float(data.get("gbdtw_score")),
             alignment_tau=_optional_float(data.get("alignment_tau")),
             similarity=_optional_float(data.get("similarity")),
+            clinical_angles=_angles_from_json(data.get("clinical_angles")),
         )
+
+
+def _angles_json(angles: Mapping[str, AngleRange]) -> JSON:
+    """A repetition's ``clinical_angles`` as ``{name: [min, max]}`` (degrees; the range is their
+    difference), left out when it has none (older runs): ten repetitions stay a few kB."""
+    if not angles:
+        return {}
+    return {"clinical_angles": {k: [v.min, v.max] for k, v in angles.items()}}
+
+
+def _angles_from_json(data: Mapping[str, Any] | None) -> dict[str, AngleRange]:
+    """Reads ``[min, max]`` pairs, or ``{"min", "max"}`` objects as the recording's are."""
+    out = {}
+    for name, value in (data or {}).items():
+        if isinstance(value, Mapping):
+            out[str(name)] = AngleRange.from_json(value)
+        else:
+            out[str(name)] = AngleRange(float(value[0]), float(value[1]))
+    return out
 
 
 def _optional_float(value: Any) -> float | None:
@@ -162,6 +185,41 @@ class AngleRange:
         return cls(float(data["min"]), float(data["max"]))
 
 
+@dataclass(frozen=True)
+class WorkspaceSummary:
+    """One hand's reachable workspace as stored: the share of the frontal hemisphere around the
+    shoulder its path covers (0..1), per quadrant (``upper_medial`` … 0..0.25 each), and a small
+    hull of the covered patch for a 3D view (unit sphere, arm lengths; X anterior, Y superior,
+    Z lateral), decimated to a few dozen vertices (`analysis.clinical.stored`)."""
+
+    side: str
+    relative_area: float
+    quadrants: Mapping[str, float] = field(default_factory=dict)
+    vertices: tuple[tuple[float, float, float], ...] = ()
+    faces: tuple[tuple[int, int, int], ...] = ()
+
+    def to_json(self) -> JSON:
+        return {
+            "side": self.side,
+            "relative_area": self.relative_area,
+            "quadrants": dict(self.quadrants),
+            "vertices": [list(v) for v in self.vertices],
+            "faces": [list(f) for f in self.faces],
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> WorkspaceSummary:
+        return cls(
+            side=str(data.get("side", "")),
+            relative_area=float(data.get("relative_area", 0.0)),
+            quadrants={str(k): float(v) for k, v in (data.get("quadrants") or {}).items()},
+            vertices=tuple(
+                (float(x), float(y), float(z)) for x, y, z in data.get("vertices") or ()
+            ),
+            faces=tuple((int(a), int(b), int(c)) for a, b, c in data.get("faces") or ()),
+        )
+
+
 def assessment_to_json(item: LandmarkAssessment) -> JSON:
     return {"frame": item.frame, "type": item.type, "levels": dict(item.levels)}
 
@@ -191,6 +249,8 @@ class AnalysisSummary:
     pass_threshold: float = 50.0  # on the 0–100 scale
     # anatomical name (CONTRACTS.md, e.g. "knee_flexion_left") -> its range over the recording
     clinical_angles: Mapping[str, AngleRange] = field(default_factory=dict)
+    # "left" / "right" -> reachable workspace of that hand; only for exercises of the arms
+    workspace: Mapping[str, WorkspaceSummary] = field(default_factory=dict)
 
     @property
     def repetition_count(self) -> int:
@@ -223,6 +283,7 @@ class AnalysisSummary:
             "periodic": self.periodic.to_json(),
             "pass_threshold": self.pass_threshold,
             "clinical_angles": {k: v.to_json() for k, v in self.clinical_angles.items()},
+            "workspace": {k: v.to_json() for k, v in self.workspace.items()},
         }
 
     @classmethod
@@ -250,5 +311,9 @@ class AnalysisSummary:
             clinical_angles={
                 str(k): AngleRange.from_json(v)
                 for k, v in (data.get("clinical_angles") or {}).items()
+            },
+            workspace={
+                str(k): WorkspaceSummary.from_json(v)
+                for k, v in (data.get("workspace") or {}).items()
             },
         )

@@ -19,7 +19,8 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh import Motion
-from analysis.clinical import clinical_angles
+from analysis.clinical import angle_ranges, angle_series
+from analysis.clinical.stored import repetition_angles, workspace_summaries
 from analysis.pipeline.keyposes import KeyPoseRepetitions, key_pose_repetitions, periodic_analysis
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import Prepared, mirrored, prepare, progress_signal
@@ -90,6 +91,7 @@ STAGES = [
     ("performance_level", "updating the level"),
     ("adjustment", "preparing the playback"),
     ("clinical_angles", "measuring joint angles"),
+    ("workspace", "measuring the reach of each hand"),
 ]
 
 
@@ -134,7 +136,11 @@ def analyse(
     with timer("adjustment"):
         playback = playback_arrays(prepared, landmarks, model, gamma)
     with timer("clinical_angles"):
-        angles = clinical_angles(prepared.motion)
+        series = angle_series(prepared.motion)
+        angles = angle_ranges(series)
+        repetitions = repetition_angles(series, repetitions)
+    with timer("workspace"):
+        workspace = workspace_summaries(prepared.motion, model.involved_joints)
     if on_progress is not None:
         on_progress("done", 1.0)
     summary = AnalysisSummary(
@@ -154,6 +160,7 @@ def analyse(
         periodic=periodic,
         pass_threshold=papers.threshold.value,
         clinical_angles=angles,
+        workspace=workspace,
     )
     return AnalysisResult(summary, playback)
 
