@@ -36,8 +36,11 @@ demo: migrate
 run: demo
 	$(BIN)/python manage.py runserver 127.0.0.1:$(PORT)
 
+# Consumes every queue (analyses, models, reports); WORKER_QUEUES=analyses (comma-separated)
+# starts a dedicated worker, e.g. on another machine (docs/RELIABILITY.md).
 worker: deps
-	$(BIN)/celery -A workers worker --loglevel=INFO --concurrency=$${WORKER_CONCURRENCY:-2}
+	$(BIN)/celery -A workers worker --loglevel=INFO --concurrency=$${WORKER_CONCURRENCY:-2} \
+		$${WORKER_QUEUES:+-Q $$WORKER_QUEUES}
 
 beat: deps
 	$(BIN)/celery -A workers beat --loglevel=INFO

@@ -29,6 +29,14 @@ from analysis.kinematics import flatten, scaled_positions
 from analysis.pipeline import TrainingRecording, analyse, build_model
 
 SUBJECTS = [f"s{k:02d}" for k in range(2, 8)]
+# The figures of the pipeline before it ran the papers' stages (progress-axis segmentation, no
+# key poses), measured with this script on 2026-11-23 at commit b6b61f4, to print beside today's.
+BEFORE = {
+    "cold start (tutor only)": {"AUC recording": 0.958, "AUC repetition": 0.879,
+                                "exact count": 0.967, "starts ±5": 0.953},
+    "trained (other subjects' labelled sessions)": {"AUC recording": 0.961, "AUC repetition": 0.912,
+                                                    "exact count": 0.967, "starts ±5": 0.953},
+}  # fmt: skip
 LABELS = ("correct", "incorrect")
 
 
@@ -53,6 +61,7 @@ class ExerciseResult:
     starts_found: int = 0
     starts_total: int = 0
     seconds: float = 0.0
+    fallbacks: int = 0
 
 
 def load_sessions(data: Path, exercise: str) -> tuple[Session, list[Session]]:
@@ -101,6 +110,7 @@ def evaluate_session(result: ExerciseResult, session: Session, model, tutor: Ses
     summary = analyse(session.motion, model).to_json()
     result.seconds += time.perf_counter() - start
     result.sessions += 1
+    result.fallbacks += summary["segmentation"] == "fallback"
     found = [r["start"] for r in summary["repetitions"]]
     result.counts_exact += len(found) == len(session.rep_starts)
     for truth in session.rep_starts:
@@ -157,6 +167,14 @@ def table(data: Path, exercises: list[str], trained: bool) -> list[ExerciseResul
     exact = sum(r.counts_exact for r in results) / sum(r.sessions for r in results)
     starts = sum(r.starts_found for r in results) / sum(r.starts_total for r in results)
     print(f"| **mean** | {rec:.3f} | {rep:.3f} | {base:.3f} | {exact:.3f} | {starts:.3f} | |")
+    fallbacks = sum(r.fallbacks for r in results)
+    print(f"\nFallback segmentation (no key-pose cycle): {fallbacks} of "
+          f"{sum(r.sessions for r in results)} sessions.")  # fmt: skip
+    now = {"AUC recording": rec, "AUC repetition": rep, "exact count": exact, "starts ±5": starts}
+    before = BEFORE[title]
+    print("\n| figure | before (b6b61f4) | now |\n|---|---|---|")
+    for name, value in now.items():
+        print(f"| {name} | {before[name]:.3f} | {value:.3f} |")
     return results
 
 

@@ -20,7 +20,7 @@ DOCUMENTS: dict[str, tuple[str, str, list[str]]] = {
         f"machine is {MACHINE}, shared with other jobs while these were taken (timings swing by up "
         "to 2×; ratios against peers are measured in the same run). Where a target is not reached, "
         "the section says so and by how much.",
-        ["bench_bvh", "bench_dtw", "bench_pipeline", "e2e"],
+        ["bench_bvh", "bench_dtw", "bench_pipeline", "e2e", "bench_scale"],
     ),
     "EVALUATION.md": (
         "Evaluation",
@@ -34,6 +34,7 @@ DOCUMENTS: dict[str, tuple[str, str, list[str]]] = {
             "eval_alignment",
             "eval_identification",
             "eval_assessment",
+            "eval_pipeline",
             "assessment_design",
         ],
     ),
@@ -47,6 +48,7 @@ DOCUMENTS: dict[str, tuple[str, str, list[str]]] = {
             "reliability_fuzz",
             "reliability_faults",
             "reliability_load",
+            "reliability_workers",
         ],
     ),
 }

@@ -41,6 +41,7 @@ ALLOWED_HOSTS = env_list("ALLOWED_HOSTS", "localhost,127.0.0.1,[::1],testserver"
 CSRF_TRUSTED_ORIGINS = env_list("CSRF_TRUSTED_ORIGINS", "")
 
 INSTALLED_APPS = [
+    "daphne",  # first: makes `manage.py runserver` an ASGI server (live sessions' WebSockets)
     "django.contrib.admin",
     "django.contrib.auth",
     "django.contrib.contenttypes",
@@ -54,9 +55,12 @@ INSTALLED_APPS = [
     "webapp.exercises",
     "webapp.recordings",
     "webapp.dashboard",
+    "webapp.demo",
     "webapp.audit",
     "webapp.api",
     "webapp.reports",
+    "webapp.live",
+    "channels",
     "rest_framework",
     "axes",
     "drf_spectacular",
@@ -86,6 +90,7 @@ MIDDLEWARE = [
 
 ROOT_URLCONF = "webapp.urls"
 WSGI_APPLICATION = "webapp.wsgi.application"
+ASGI_APPLICATION = "webapp.asgi.application"
 
 TEMPLATES = [
     {
@@ -136,6 +141,32 @@ STATICFILES_DIRS = [
 WHITENOISE_USE_FINDERS = DEBUG
 MEDIA_URL = "/media/"
 MEDIA_ROOT = Path(os.environ.get("MEDIA_ROOT", DATA_DIR / "media"))
+
+# Files (uploads, result arrays, tutors, exercise models, reports) go through Django's default
+# storage only: the local folder MEDIA_ROOT by default, an S3-compatible bucket when S3_BUCKET is
+# set (credentials from AWS_ACCESS_KEY_ID / AWS_SECRET_ACCESS_KEY, or the machine's role;
+# S3_ENDPOINT_URL for MinIO and the like). Workers on other machines then share nothing but
+# PostgreSQL, Redis and the bucket (docs/RELIABILITY.md).
+S3_BUCKET = os.environ.get("S3_BUCKET", "")
+STORAGES = {
+    "default": {"BACKEND": "django.core.files.storage.FileSystemStorage"},
+    "staticfiles": {"BACKEND": "django.contrib.staticfiles.storage.StaticFilesStorage"},
+}
+if S3_BUCKET:
+    STORAGES["default"] = {
+        "BACKEND": "storages.backends.s3.S3Storage",
+        "OPTIONS": {
+            "bucket_name": S3_BUCKET,
+            "endpoint_url": os.environ.get("S3_ENDPOINT_URL") or None,
+            "region_name": os.environ.get("S3_REGION") or None,
+            "location": os.environ.get("S3_PREFIX", ""),
+            # Health data: private objects, never overwritten (names get a suffix instead).
+            "default_acl": None,
+            "file_overwrite": False,
+            "querystring_auth": True,
+            "addressing_style": os.environ.get("S3_ADDRESSING_STYLE") or None,
+        },
+    }
 
 OTP_TOTP_ISSUER = "Physio dashboard"
 LOGIN_URL = "accounts:login"
@@ -189,10 +220,25 @@ API_TOKEN_DAYS = int(os.environ.get("API_TOKEN_DAYS", "30"))
 # Celery: eager (in-process) when no broker is configured, so `make run` needs no services.
 REDIS_URL = os.environ.get("REDIS_URL", "")
 CELERY_BROKER_URL = REDIS_URL or "memory://"
+# Live sessions: WebSocket groups on Redis when configured, in memory (one process) otherwise.
+_REDIS_LAYER = {
+    "BACKEND": "channels_redis.core.RedisChannelLayer",
+    "CONFIG": {"hosts": [REDIS_URL]},
+}
+CHANNEL_LAYERS = {
+    "default": _REDIS_LAYER if REDIS_URL else {"BACKEND": "channels.layers.InMemoryChannelLayer"}
+}
+LIVE_MAX_FPS = float(os.environ.get("LIVE_MAX_FPS", "1000"))  # frames/s per session, then dropped
+LIVE_BURST = float(os.environ.get("LIVE_BURST", "250"))
 CELERY_RESULT_BACKEND = REDIS_URL or None
 CELERY_TASK_ALWAYS_EAGER = not REDIS_URL
 CELERY_TASK_EAGER_PROPAGATES = True
-CELERY_TASK_DEFAULT_QUEUE = os.environ.get("CELERY_QUEUE", "physio")
+# Queues (workers/celery.py routes each task): analyses (and the short housekeeping tasks) on
+# CELERY_QUEUE, model builds and PDF reports on queues of their own, so a slow build or report
+# never waits in front of an analysis. `make worker` consumes all three; see docs/RELIABILITY.md.
+CELERY_TASK_DEFAULT_QUEUE = os.environ.get("CELERY_QUEUE", "analyses")
+CELERY_MODELS_QUEUE = os.environ.get("CELERY_MODELS_QUEUE", "models")
+CELERY_REPORTS_QUEUE = os.environ.get("CELERY_REPORTS_QUEUE", "reports")
 CELERY_TASK_SERIALIZER = "json"
 CELERY_RESULT_SERIALIZER = "json"
 CELERY_ACCEPT_CONTENT = ["json"]
@@ -231,6 +277,9 @@ CELERY_BEAT_SCHEDULE = {
         "schedule": 3600.0,
     },
     "refit-pass-thresholds": {"task": "workers.tasks.refit_pass_thresholds", "schedule": 3600.0},
+    # The home page's stored attention list: runs refresh their patient on write; this catches
+    # what changes with time alone (failures ageing out, sessions missed).
+    "refresh-attention": {"task": "workers.tasks.refresh_attention", "schedule": 600.0},
 }
 
 REST_FRAMEWORK = {

@@ -13,6 +13,7 @@ urlpatterns = [
     path("patients/", include("webapp.patients.urls")),
     path("exercises/", include("webapp.exercises.urls")),
     path("recordings/", include("webapp.recordings.urls")),
+    path("live/", include("webapp.live.urls")),
     path("", include("webapp.reports.urls")),
     path("", include("webapp.dashboard.urls")),
 ]

@@ -1,13 +1,58 @@
-"""The Celery application, configured from the Django settings (``CELERY_*`` names)."""
+"""The Celery application, configured from the Django settings (``CELERY_*`` names).
+
+Queues: analyses (and the short housekeeping tasks) go to the default queue (``CELERY_QUEUE``,
+"analyses"), exercise-model builds to ``CELERY_MODELS_QUEUE`` ("models") and PDF reports to
+``CELERY_REPORTS_QUEUE`` ("reports"). With prefetch 1 and late acknowledgement a worker holds one
+message at a time, so a model build or a report never sits in front of an analysis, and dedicated
+workers (``-Q analyses``) keep analysing while builds run elsewhere. A worker started without
+``-Q`` (``make worker``) consumes every queue.
+"""
 
 from __future__ import annotations
 
 import os
+from typing import Any
 
 from celery import Celery
+from kombu import Exchange, Queue
 
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "webapp.settings")
 
 app = Celery("physio")
 app.config_from_object("django.conf:settings", namespace="CELERY")
 app.autodiscover_tasks(["workers"], related_name="tasks")
+
+# Task name → the setting naming its queue; tasks not listed use the default queue.
+QUEUE_SETTING = {
+    "workers.tasks.build_exercise_model": "CELERY_MODELS_QUEUE",
+    "workers.tasks.rebuild_models_with_corrections": "CELERY_MODELS_QUEUE",
+    "workers.tasks.refit_pass_thresholds": "CELERY_MODELS_QUEUE",
+    "workers.tasks.make_report": "CELERY_REPORTS_QUEUE",
+}
+
+
+def queue_names() -> list[str]:
+    """Every queue of the project, the default (analyses) queue first."""
+    from django.conf import settings
+
+    names = [app.conf.task_default_queue, settings.CELERY_MODELS_QUEUE]
+    return list(dict.fromkeys([*names, settings.CELERY_REPORTS_QUEUE]))
+
+
+def route_task(name: str, args: Any, kwargs: Any, options: Any, task: Any = None, **kw: Any):
+    """Celery router: the queue of a task by its name (None: the default queue)."""
+    from django.conf import settings
+
+    setting = QUEUE_SETTING.get(name)
+    return {"queue": getattr(settings, setting)} if setting else None
+
+
+app.conf.task_routes = (route_task,)
+
+
+@app.on_after_configure.connect
+def _declare_queues(sender: Celery, **kwargs: Any) -> None:
+    # A worker started without -Q consumes all of these.
+    sender.conf.task_queues = [
+        Queue(name, Exchange(name, type="direct"), routing_key=name) for name in queue_names()
+    ]

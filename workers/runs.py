@@ -15,6 +15,7 @@ from django.conf import settings
 from django.db.models import F, Q
 from django.utils import timezone
 
+from webapp.dashboard.precompute import refresh_after_run
 from webapp.recordings.models import AnalysisRun, RunStatus
 
 
@@ -70,4 +71,7 @@ def fail(run_id: str, token: str, user_error: str, developer_error: str) -> bool
 
 def _finish(run_id: str, token: str, **fields: Any) -> bool:
     running = AnalysisRun.objects.filter(pk=run_id, lease_token=token, status=RunStatus.RUNNING)
-    return running.update(finished_at=timezone.now(), heartbeat_at=timezone.now(), **fields) == 1
+    finished = running.update(finished_at=timezone.now(), heartbeat_at=timezone.now(), **fields)
+    if finished == 1:  # the stored attention list follows the outcome (on write)
+        refresh_after_run(run_id)
+    return finished == 1

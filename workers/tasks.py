@@ -68,6 +68,14 @@ def enqueue_model_build(model_id: str) -> None:
     build_exercise_model.delay(model_id)
 
 
+@shared_task(name="workers.tasks.refresh_attention", ignore_result=True)
+def refresh_attention() -> int:
+    """Recompute every clinic's stored attention list (what changes with time alone)."""
+    from webapp.dashboard.precompute import refresh_all
+
+    return refresh_all()
+
+
 @shared_task(name="workers.tasks.purge_deleted_patients", ignore_result=True)
 def purge_deleted_patients() -> int:
     """Hard-delete patients soft-deleted longer ago than PATIENT_RETENTION_DAYS, with files."""

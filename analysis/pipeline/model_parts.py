@@ -22,8 +22,9 @@ import numpy.typing as npt
 from analysis.bvh import Motion
 from analysis.dtw.joint_weights import JointWeightOptimizer
 from analysis.dtw.metrics import segment_labels
+from analysis.kinematics import normalised_positions, rotations
 from analysis.kinematics import quaternions as quat
-from analysis.kinematics import rotations
+from analysis.landmarks.evaluation import evaluate, summed
 from analysis.landmarks.identification import LandmarkModel, LandmarkOptions
 from analysis.online import BayesThreshold
 from analysis.pipeline.gestures import align_gesture, score_scale, wooe_options
@@ -33,6 +34,7 @@ COLD_THRESHOLD = 50.0
 WEIGHT_GENERATIONS = 15
 WEIGHT_FPS = 15.0  # joint weights decide which joints matter: a coarse timeline is enough
 WARPED_COPIES = 4
+CV_FOLDS = 3
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,30 @@ def fit_landmarks(
     """The key-pose model; labelled recordings must be at the tutor's frame rate."""
     model = LandmarkModel(options=options or LandmarkOptions())
     return model.fit(tutor, list(frames), list(types), training=list(training))
+
+
+def landmark_precision(
+    tutor: Motion,
+    frames: Sequence[int],
+    types: Sequence[int],
+    training: Sequence[tuple[Motion, Sequence[int], Sequence[int]]],
+    options: LandmarkOptions | None = None,
+) -> float | None:
+    """Cross-validated precision π (004 eq 5.36) of the final key poses on the labelled
+    recordings: `CV_FOLDS` folds, each held-out recording detected by a model fitted on the tutor
+    and the other folds; None with fewer than two labelled recordings."""
+    if len(training) < 2:
+        return None
+    folds = min(CV_FOLDS, len(training))
+    scores = []
+    for k in range(folds):
+        rest = [t for i, t in enumerate(training) if i % folds != k]
+        model = fit_landmarks(tutor, frames, types, rest, options)
+        for motion, f, t in training[k::folds]:
+            found = model.detect(motion).landmarks
+            data = normalised_positions(motion).reshape(motion.n_frames, -1)
+            scores.append(evaluate(found.frames, found.types, f, t, data))
+    return round(summed(scores).precision, 3)
 
 
 def _warped(q: FloatArray, frames: Sequence[int], rng: np.random.Generator) -> tuple:
@@ -144,6 +170,7 @@ class PaperParts:
     tutor_progress: FloatArray
     gesture_scale: float
     threshold: PassThreshold
+    precision: float | None = None  # cross-validated key-pose precision (labelled recordings)
 
     def report(self) -> dict[str, object]:
         """The training report's entries for these parts (JSON-ready)."""
@@ -154,6 +181,7 @@ class PaperParts:
                 "refining": f"{options.refine.clustering} clustering, "
                 f"{options.refine.selection} selection",
                 "periodic_patterns": [list(p) for p in self.landmarks.patterns_],
+                "cross_validated_precision": self.precision,
             },
             "joint_weights": [round(float(w), 4) for w in self.joint_weights],
             "alignment_error": {
@@ -195,4 +223,5 @@ def fit_paper_parts(  # noqa: PLR0917 (the tutor's parts as fit_components holds
         tutor_progress=np.asarray(progress, dtype=np.float64),
         gesture_scale=scale,
         threshold=pass_threshold([s for s, _ in scored], [c for _, c in scored]),
+        precision=landmark_precision(tutor, frames, types, training),
     )

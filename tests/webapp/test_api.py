@@ -108,3 +108,127 @@ def test_schema_and_docs_served(api):
     docs = api.get("/api/docs/")
     assert docs.status_code == 200
     assert b"cdn" not in docs.content.lower()
+
+
+def analysed_summary(n_reps: int = 8) -> dict:
+    """A stored `analyse --json` object of realistic size (fps and scores with noise digits)."""
+    reps = [
+        {
+            "start": 40 * i,
+            "end": 40 * i + 35,
+            "score": 60.0 + 3.14159 * i,
+            "passed": i % 3 != 0,
+            "guidance": [{"type": "too fast", "frames": [40 * i, 40 * i + 10]}],
+            "alignment_tau": 0.812345,
+            "similarity": 12.345678,
+        }
+        for i in range(n_reps)
+    ]
+    return {
+        "frames": 40 * n_reps,
+        "fps": 30.000300003,
+        "score": 71.45678,
+        "repetitions": reps,
+        "repetition_count": n_reps,
+        "landmarks": [{"frame": 40 * i + 20, "type": 2, "origin": "identified"} for i in range(8)],
+        "assessment": [{"frame": 20, "type": 2, "levels": {"LeftKnee": 2, "RightKnee": 1}}] * 8,
+        "feedback": [{"frame": 20, "text": "Bend your left knee a little further."}] * 8,
+        "timings_ms": {"alignment": 12.3456789, "periodic_analysis": 3.3333333},
+        "clinical_angles": {"knee_flexion_left": {"min": 1.23456, "max": 97.65432, "range": 96.4}},
+        "gamma": {"LeftKnee": 0.123456789},
+    }
+
+
+@pytest.fixture
+def history(world):
+    from webapp.recordings.models import AnalysisRun, RunStatus
+
+    exercise = make_exercise(world.clinic)
+    recordings = []
+    for source in (
+        "reps/m01_s01_e02.bvh.gz",
+        "reps/m01_s01_e03.bvh.gz",
+        "reps/m01_s01_e01_inc.bvh.gz",
+    ):
+        recording = make_recording(world.patient, exercise, source)
+        Recording.objects.filter(pk=recording.pk).update(fps=30.0003, duration_s=9.876543)
+        recordings.append(recording)
+    AnalysisRun.objects.filter(recording__in=recordings[:2]).update(
+        status=RunStatus.SUCCEEDED, progress=100, summary=analysed_summary()
+    )
+    return recordings
+
+
+def test_recordings_list_answers_small_summaries(api, world, history):
+    response = api.get(f"/api/v1/patients/{world.patient.pk}/recordings/")
+    body = response.json()
+    assert body["count"] == 3
+    per_recording = len(response.content) / body["count"]
+    assert per_recording < 900, per_recording
+    done = [r for r in body["results"] if r["status"] == "succeeded"]
+    assert len(done) == 2
+    first = done[0]
+    assert "result" not in first and "feedback" not in response.content.decode()
+    assert (first["score"], first["repetitions"], first["passed"]) == (71.5, 8, 5)
+    assert first["fps"] == 30.0 and first["duration_s"] == 9.88
+    assert first["uploaded_at"].endswith("Z") and "." not in first["uploaded_at"]
+    assert first["links"]["self"] == f"/api/v1/recordings/{first['id']}/"
+    queued = next(r for r in body["results"] if r["status"] == "queued")
+    assert queued["score"] is None and queued["repetitions"] is None
+
+
+def test_full_result_on_the_detail_and_behind_fields_result(api, world, history):
+    with_result = api.get(f"/api/v1/patients/{world.patient.pk}/recordings/?fields=result")
+    results = {r["id"]: r.get("result") for r in with_result.json()["results"]}
+    detail = api.get(f"/api/v1/recordings/{history[0].pk}/").json()
+    assert detail["status"] == "succeeded" and detail["progress"] == 100
+    result = detail["result"]
+    assert results[str(history[0].pk)] == result
+    assert results[str(history[2].pk)] is None  # not analysed yet
+    assert result["fps"] == 30.0 and result["score"] == 71.5
+    assert result["repetitions"][1]["score"] == 63.1 and result["repetitions"][1]["passed"]
+    assert result["timings_ms"]["alignment"] == 12.3
+    assert result["clinical_angles"]["knee_flexion_left"] == {
+        "min": 1.2,
+        "max": 97.7,
+        "range": 96.4,
+    }
+    for key in ("frames", "landmarks", "assessment", "feedback", "repetitions"):
+        assert key in result
+    assert detail["uploaded_at"].endswith("Z") and detail["run"]["created_at"].endswith("Z")
+    assert api.get(f"/api/v1/patients/{world.patient.pk}/recordings/?fields=x").status_code == 400
+
+
+# A FHIR Bundle is typed by the FHIR specification, not by this schema; the report endpoints'
+# 202 answer belongs to webapp/reports (a typed serializer there is still to come).
+NOT_YET_TYPED = ("/fhir/", "/report.pdf")
+
+
+def untyped_objects(node, where: str) -> list[str]:
+    """Where the schema has an object without properties (error bodies excepted)."""
+    found = []
+    if isinstance(node, dict):
+        extra = node.get("additionalProperties")
+        untyped = node.get("type") == "object" and not (
+            node.get("properties") or (isinstance(extra, dict) and extra)
+        )
+        if untyped and "Why the request failed" not in node.get("description", ""):
+            found.append(where)
+        for key, value in node.items():
+            found += untyped_objects(value, f"{where}/{key}")
+    elif isinstance(node, list):
+        for index, value in enumerate(node):
+            found += untyped_objects(value, f"{where}/{index}")
+    return found
+
+
+def test_schema_types_every_response_object(api):
+    schema = api.get("/api/schema/?format=json").json()
+    bare = untyped_objects(schema["components"]["schemas"], "components")
+    for path, operations in schema["paths"].items():
+        if path.endswith(NOT_YET_TYPED):
+            continue
+        for method, operation in operations.items():
+            for code, answer in operation.get("responses", {}).items():
+                bare += untyped_objects(answer, f"{method.upper()} {path} {code}")
+    assert bare == [], "\n".join(bare)

@@ -17,6 +17,7 @@ from django.urls import URLPattern, URLResolver, get_resolver, reverse
 
 from tests.personas import make_exercise, make_recording
 from webapp.accounts.tokens import issue_token
+from webapp.live.models import LiveSession
 
 PERSONAS = (
     "therapist",
@@ -99,6 +100,8 @@ CASES = [
     Case("api-patient-recordings", "patient", "get", OWN_API_OBJECT),
     Case("api-patient-progress", "patient", "get", OWN_API_OBJECT),
     Case("api-patient-prescriptions", "patient", "get", OWN_API_OBJECT),
+    Case("api-patient-history-csv", "patient", "get", OWN_API_OBJECT),
+    Case("api-patient-fhir", "patient", "get", OWN_API_OBJECT),
     Case("api-exercises", None, "get", (200, 200, 200, 200, 200, 200, 401)),
     # An empty upload names no patient: 400 for anyone signed in.
     Case("api-recordings", None, "post", (400, 400, 400, 400, 400, 400, 401)),
@@ -118,6 +121,12 @@ CASES = [
     Case("reports:progress-print", "patient", "get", OWN_OBJECT),
     Case("reports:api-recording-report", "recording", "get", OWN_API_REPORT),
     Case("reports:api-progress-report", "patient", "get", OWN_API_REPORT),
+    # Live sessions: the page and its status follow the session's patient; replaying a recording
+    # is open to whoever may see it; an empty POST names no patient (400).
+    Case("live:page", "live", "get", OWN_OBJECT),
+    Case("live:status", "live", "get", OWN_OBJECT),
+    Case("live:replay", "recording", "post", (302, 302, 302, 404, 302, 404, 302)),
+    Case("api-live-sessions", None, "post", (400, 400, 400, 400, 400, 400, 401)),
 ]
 
 
@@ -126,7 +135,11 @@ def objects(world):
     exercise = make_exercise(world.clinic)
     recording = make_recording(world.patient, exercise)
     token, _ = issue_token(world.therapist, "practice system")
-    return {"patient": world.patient, "exercise": exercise, "recording": recording, "token": token}
+    live = LiveSession.objects.create(
+        clinic=world.clinic, patient=world.patient, exercise=exercise, created_by=world.therapist
+    )
+    return {"patient": world.patient, "exercise": exercise, "recording": recording, "token": token,
+            "live": live}  # fmt: skip
 
 
 def url_kwargs(target: str | None, objects: dict) -> dict:

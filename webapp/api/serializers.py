@@ -1,13 +1,52 @@
+"""What the API answers, every object typed for the OpenAPI schema.
+
+Lists answer summaries (a recording's status, score, repetition and passed counts and links);
+the full `analyse --json` result is on the recording's own endpoint (or behind `?fields=result`).
+Datetimes are ISO 8601 in UTC with `Z`; numbers are rounded to what they mean
+(`webapp.api.numbers`).
+"""
+
 from __future__ import annotations
 
+import datetime
+
+from django.db import models
+from django.urls import reverse
+from drf_spectacular.utils import extend_schema_field
 from rest_framework import serializers
 
+from webapp.api.numbers import round_or_none, rounded, utc_iso
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun, Recording
 
+RUN_STATES = ["queued", "running", "succeeded", "failed"]
 
-class PatientSerializer(serializers.ModelSerializer):
+
+class UTCDateTimeField(serializers.DateTimeField):
+    """ISO 8601 in UTC ending in `Z`, whole seconds: one format in every answer."""
+
+    def to_representation(self, value: datetime.datetime | str | None) -> str | None:
+        return utc_iso(value) if value else None
+
+
+class RoundedFloatField(serializers.FloatField):
+    def __init__(self, *, places: int = 1, **kwargs) -> None:
+        self.places = places
+        super().__init__(**kwargs)
+
+    def to_representation(self, value) -> float | None:
+        return round_or_none(value, self.places)
+
+
+class ApiModelSerializer(serializers.ModelSerializer):
+    serializer_field_mapping = {
+        **serializers.ModelSerializer.serializer_field_mapping,
+        models.DateTimeField: UTCDateTimeField,
+    }
+
+
+class PatientSerializer(ApiModelSerializer):
     class Meta:
         model = Patient
         fields = [
@@ -20,7 +59,10 @@ class PatientSerializer(serializers.ModelSerializer):
         ]
 
 
-class ExerciseSerializer(serializers.ModelSerializer):
+class ExerciseSerializer(ApiModelSerializer):
+    involved_joints = serializers.ListField(child=serializers.CharField(), read_only=True)
+    landmark_type_names = serializers.DictField(child=serializers.CharField(), read_only=True)
+
     class Meta:
         model = Exercise
         fields = [
@@ -33,7 +75,7 @@ class ExerciseSerializer(serializers.ModelSerializer):
         ]
 
 
-class RunSerializer(serializers.ModelSerializer):
+class RunSerializer(ApiModelSerializer):
     class Meta:
         model = AnalysisRun
         fields = [
@@ -49,11 +91,93 @@ class RunSerializer(serializers.ModelSerializer):
         ]
 
 
-class RecordingSerializer(serializers.ModelSerializer):
+# The `analyse --json` object (CONTRACTS.md), for the schema; answers carry it as stored, rounded.
+class LandmarkSerializer(serializers.Serializer):
+    frame = serializers.IntegerField()
+    type = serializers.IntegerField()
+    origin = serializers.CharField(required=False)
+
+
+class GuidanceSerializer(serializers.Serializer):
+    type = serializers.CharField()
+    frames = serializers.ListField(child=serializers.IntegerField())
+
+
+class AngleRangeSerializer(serializers.Serializer):
+    min = serializers.FloatField()
+    max = serializers.FloatField()
+    range = serializers.FloatField()
+
+
+class RepetitionSerializer(serializers.Serializer):
+    start = serializers.IntegerField()
+    end = serializers.IntegerField()
+    score = serializers.FloatField()
+    passed = serializers.BooleanField(required=False, allow_null=True)
+    guidance = GuidanceSerializer(many=True, required=False)
+    alignment_tau = serializers.FloatField(required=False, allow_null=True)
+    similarity = serializers.FloatField(required=False, allow_null=True)
+
+
+class AssessmentSerializer(serializers.Serializer):
+    frame = serializers.IntegerField()
+    type = serializers.IntegerField()
+    levels = serializers.DictField(child=serializers.IntegerField())
+
+
+class FeedbackSerializer(serializers.Serializer):
+    frame = serializers.IntegerField()
+    text = serializers.CharField()
+
+
+class PeriodicSerializer(serializers.Serializer):
+    candidates = serializers.IntegerField()
+    removed = serializers.ListField(child=serializers.IntegerField())
+    inserted = serializers.ListField(child=serializers.IntegerField())
+
+
+class AnalysisResultSerializer(serializers.Serializer):
+    frames = serializers.IntegerField()
+    fps = serializers.FloatField()
+    landmarks = LandmarkSerializer(many=True)
+    repetitions = RepetitionSerializer(many=True)
+    score = serializers.FloatField()
+    assessment = AssessmentSerializer(many=True)
+    feedback = FeedbackSerializer(many=True)
+    timings_ms = serializers.DictField(child=serializers.FloatField())
+    periodic = PeriodicSerializer(required=False)
+    segmentation = serializers.CharField(required=False)
+    pass_threshold = serializers.FloatField(required=False, allow_null=True)
+    clinical_angles = serializers.DictField(child=AngleRangeSerializer(), required=False)
+    gamma = serializers.DictField(child=serializers.FloatField(), required=False)
+    range_of_motion = serializers.DictField(child=serializers.FloatField(), required=False)
+    repetition_count = serializers.IntegerField(required=False)
+
+
+class RecordingLinksSerializer(serializers.Serializer):
+    self = serializers.CharField(help_text="this recording (with the full result)")
+    result = serializers.CharField(help_text="the results-page data")
+
+
+def recording_links(recording_id) -> dict[str, str]:
+    return {
+        "self": reverse("api-recording", args=[recording_id]),
+        "result": reverse("api-recording-result", args=[recording_id]),
+    }
+
+
+class RecordingSerializer(ApiModelSerializer):
+    """A recording with its newest analysis: `status`, `progress` and, when it succeeded,
+    `result` holding the fields of `analyse --json`."""
+
     status = serializers.SerializerMethodField()
     progress = serializers.SerializerMethodField()
     result = serializers.SerializerMethodField()
     run = serializers.SerializerMethodField()
+    fps = RoundedFloatField(places=1, read_only=True)
+    duration_s = RoundedFloatField(places=2, read_only=True)
+    suggestion_distance = RoundedFloatField(places=3, read_only=True, allow_null=True)
+    links = serializers.SerializerMethodField()
 
     class Meta:
         model = Recording
@@ -75,12 +199,14 @@ class RecordingSerializer(serializers.ModelSerializer):
             "run",
             "suggested_exercise",
             "suggestion_distance",
+            "links",
         ]
 
     def latest_run(self, recording: Recording) -> AnalysisRun | None:
         runs = list(recording.runs.all())
         return runs[0] if runs else None
 
+    @extend_schema_field(serializers.ChoiceField(choices=RUN_STATES, allow_null=True))
     def get_status(self, recording: Recording) -> str | None:
         run = self.latest_run(recording)
         return run.status if run else None
@@ -89,13 +215,63 @@ class RecordingSerializer(serializers.ModelSerializer):
         run = self.latest_run(recording)
         return run.progress if run else 0
 
+    @extend_schema_field(AnalysisResultSerializer(allow_null=True))
     def get_result(self, recording: Recording) -> dict | None:
         run = self.latest_run(recording)
-        return run.summary if run and run.status == "succeeded" else None
+        return rounded(run.summary) if run and run.status == "succeeded" else None
 
+    @extend_schema_field(RunSerializer(allow_null=True))
     def get_run(self, recording: Recording) -> dict | None:
         run = self.latest_run(recording)
         return RunSerializer(run).data if run else None
+
+    @extend_schema_field(RecordingLinksSerializer)
+    def get_links(self, recording: Recording) -> dict[str, str]:
+        return recording_links(recording.pk)
+
+
+class RecordingSummarySerializer(serializers.Serializer):
+    """One recording in a list: its newest analysis in figures, the full result behind `links`.
+
+    Reads the annotations of `webapp.api.summaries.recording_summaries` (no summary JSON)."""
+
+    id = serializers.UUIDField()
+    exercise = serializers.UUIDField(source="exercise_id", allow_null=True)
+    exercise_name = serializers.CharField(allow_null=True)
+    original_name = serializers.CharField()
+    uploaded_at = UTCDateTimeField()
+    n_frames = serializers.IntegerField()
+    fps = RoundedFloatField(places=1)
+    duration_s = RoundedFloatField(places=2)
+    pain_score = serializers.IntegerField(allow_null=True)
+    run = serializers.UUIDField(source="run_id", allow_null=True)
+    status = serializers.ChoiceField(source="run_status", choices=RUN_STATES, allow_null=True)
+    progress = serializers.IntegerField(source="run_progress", allow_null=True)
+    score = RoundedFloatField(source="run_score", places=1, allow_null=True)
+    repetitions = serializers.IntegerField(source="run_repetitions", allow_null=True)
+    passed = serializers.IntegerField(source="run_passed", allow_null=True)
+    links = serializers.SerializerMethodField()
+
+    @extend_schema_field(RecordingLinksSerializer)
+    def get_links(self, recording: Recording) -> dict[str, str]:
+        return recording_links(recording.pk)
+
+    def to_representation(self, instance):
+        data = super().to_representation(instance)
+        if data["status"] != "succeeded":  # figures only of a finished analysis
+            data["repetitions"] = data["passed"] = None
+        return data
+
+
+class RecordingSummaryWithResultSerializer(RecordingSummarySerializer):
+    """`?fields=result`: the summary plus the newest succeeded result."""
+
+    result = serializers.SerializerMethodField()
+
+    @extend_schema_field(AnalysisResultSerializer(allow_null=True))
+    def get_result(self, recording: Recording) -> dict | None:
+        summary = getattr(recording, "run_summary", None)
+        return rounded(summary) if recording.run_status == "succeeded" and summary else None
 
 
 class RecordingUploadSerializer(serializers.Serializer):

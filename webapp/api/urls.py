@@ -3,7 +3,8 @@ from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerView
 from rest_framework.permissions import IsAuthenticated
 
 from webapp.accounts.tokens import obtain_token
-from webapp.api import views
+from webapp.api import exports, views
+from webapp.live.api import LiveSessionCreate
 
 urlpatterns = [
     path("v1/auth/token/", obtain_token, name="api-token"),
@@ -24,6 +25,12 @@ urlpatterns = [
         views.PatientPrescriptions.as_view(),
         name="api-patient-prescriptions",
     ),
+    path(
+        "v1/patients/<uuid:pk>/history.csv",
+        exports.PatientHistoryCSV.as_view(),
+        name="api-patient-history-csv",
+    ),
+    path("v1/patients/<uuid:pk>/fhir/", exports.PatientFHIR.as_view(), name="api-patient-fhir"),
     path("v1/exercises/", views.ExerciseList.as_view(), name="api-exercises"),
     path("v1/recordings/", views.RecordingCreate.as_view(), name="api-recordings"),
     path("v1/recordings/<uuid:pk>/", views.RecordingDetail.as_view(), name="api-recording"),
@@ -42,6 +49,7 @@ urlpatterns = [
         views.RecordingConfirm.as_view(),
         name="api-recording-confirm",
     ),
+    path("v1/live-sessions/", LiveSessionCreate.as_view(), name="api-live-sessions"),
     # The schema describes clinical endpoints: only signed-in users and token holders read it.
     path(
         "schema/",

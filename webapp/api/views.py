@@ -20,13 +20,17 @@ from webapp.accounts.permissions import (
     visible_exercises,
     visible_patients,
 )
+from webapp.api import responses
 from webapp.api.serializers import (
     ConfirmSerializer,
     ExerciseSerializer,
     PatientSerializer,
     RecordingSerializer,
+    RecordingSummarySerializer,
+    RecordingSummaryWithResultSerializer,
     RecordingUploadSerializer,
 )
+from webapp.api.summaries import recording_summaries
 from webapp.patients.adherence import adherence
 from webapp.patients.progress import patient_progress
 from webapp.recordings import services
@@ -65,16 +69,41 @@ class PatientDetail(generics.RetrieveAPIView):
         return get_patient_for_user(self.request, self.kwargs["pk"])
 
 
-class PatientRecordings(generics.ListAPIView):
-    serializer_class = RecordingSerializer
+FIELDS_PARAMETER = OpenApiParameter(
+    "fields",
+    OpenApiTypes.STR,
+    enum=["result"],
+    description="`result`: add each recording's full analysis result (large)",
+)
 
-    @extend_schema(parameters=DATE_FILTERS)
+
+class PatientRecordings(generics.ListAPIView):
+    """A patient's recordings, newest first, as summaries (status, score, repetitions, passed,
+    links); the full result is on the recording's endpoint or here with `?fields=result`."""
+
+    def with_result(self) -> bool:
+        fields = self.request.query_params.get("fields")
+        if fields not in (None, "", "result"):
+            raise ValidationError({"fields": f"'{fields}' is not a field set (use 'result')."})
+        return fields == "result"
+
+    def get_serializer_class(self):
+        if self.with_result():
+            return RecordingSummaryWithResultSerializer
+        return RecordingSummarySerializer
+
+    @extend_schema(
+        parameters=[*DATE_FILTERS, FIELDS_PARAMETER],
+        responses=RecordingSummarySerializer(many=True),
+    )
     def get(self, request, *args, **kwargs):
         return super().get(request, *args, **kwargs)
 
     def get_queryset(self):
         patient = get_patient_for_user(self.request, self.kwargs["pk"])
-        recordings = patient.recordings.prefetch_related("runs").order_by("-uploaded_at")
+        recordings = recording_summaries(
+            patient.recordings.order_by("-uploaded_at"), with_result=self.with_result()
+        )
         since, until = date_param(self.request, "since"), date_param(self.request, "until")
         if since:
             recordings = recordings.filter(uploaded_at__date__gte=since)
@@ -84,7 +113,7 @@ class PatientRecordings(generics.ListAPIView):
 
 
 class PatientProgress(APIView):
-    @extend_schema(parameters=DATE_FILTERS, responses={200: dict})
+    @extend_schema(parameters=DATE_FILTERS, responses={200: responses.ProgressSerializer})
     def get(self, request: Request, pk) -> Response:
         patient = get_patient_for_user(request, pk)
         points = patient_progress(
@@ -93,7 +122,7 @@ class PatientProgress(APIView):
             since=date_param(request, "since"),
             until=date_param(request, "until"),
         )
-        return Response({"patient": str(patient.pk), "points": points})
+        return Response(responses.progress_body(patient.pk, points))
 
 
 class ExerciseList(generics.ListAPIView):
@@ -143,10 +172,11 @@ class RecordingDetail(generics.RetrieveAPIView):
 class RecordingResult(APIView):
     """Results data: repetitions, assessment, feedback, metrics, γ, similar earlier recordings."""
 
-    @extend_schema(responses={200: dict})
+    @extend_schema(responses={200: responses.ResultDataSerializer})
     def get(self, request: Request, pk) -> Response:
         recording = get_recording_for_user(request, pk)
-        return Response(result_data(recording, recording.runs.first(), request.user))
+        data = result_data(recording, recording.runs.first(), request.user)
+        return Response(responses.result_body(data))
 
 
 class RecordingConfirm(APIView):
@@ -176,7 +206,7 @@ class RecordingConfirm(APIView):
 class PatientPrescriptions(APIView):
     """A patient's prescriptions with adherence (sessions done versus prescribed)."""
 
-    @extend_schema(responses={200: dict})
+    @extend_schema(responses={200: responses.PrescriptionsSerializer})
     def get(self, request: Request, pk) -> Response:
         patient = get_patient_for_user(request, pk)
         rows = [
@@ -204,14 +234,14 @@ class RecordingCorrections(APIView):
             get_recording_for_user(request, pk, audit=False)  # 404 before 403 for strangers
             raise PermissionDenied("Only the clinic's therapists correct analyses.")
         recording = get_recording_for_user(request, pk)
-        return recording.runs.filter(status="succeeded").first()
+        return recording.latest_succeeded_run()
 
-    @extend_schema(responses={200: dict})
+    @extend_schema(responses={200: responses.CorrectionsSerializer})
     def get(self, request: Request, pk) -> Response:
         run = self.latest(request, pk)
         return Response(corrections_of(run) if run else {"run": None})
 
-    @extend_schema(request=dict, responses={200: dict})
+    @extend_schema(request=dict, responses={200: responses.CorrectionsSavedSerializer})
     def post(self, request: Request, pk) -> Response:
         run = self.latest(request, pk)
         if run is None:

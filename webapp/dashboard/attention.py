@@ -77,20 +77,23 @@ class Period(NamedTuple):
     sessions_per_week: int
 
 
-def clinic_runs(clinic_id: Any) -> QuerySet[AnalysisRun]:
-    return AnalysisRun.objects.filter(
+def clinic_runs(clinic_id: Any, patient_id: Any = None) -> QuerySet[AnalysisRun]:
+    runs = AnalysisRun.objects.filter(
         recording__clinic_id=clinic_id,
         recording__patient__deleted_at__isnull=True,
         recording__patient__archived_at__isnull=True,
     )
+    return runs if patient_id is None else runs.filter(recording__patient_id=patient_id)
 
 
-def failed_analyses(clinic_id: Any, now: datetime.datetime) -> list[tuple[Any, Reason]]:
+def failed_analyses(
+    clinic_id: Any, now: datetime.datetime, patient_id: Any = None
+) -> list[tuple[Any, Reason]]:
     newer = AnalysisRun.objects.filter(
         recording_id=OuterRef("recording_id"), created_at__gt=OuterRef("created_at")
     )
     rows = (
-        clinic_runs(clinic_id)
+        clinic_runs(clinic_id, patient_id)
         .filter(status=RunStatus.FAILED, created_at__gte=now - _days(FAILED_WITHIN_DAYS))
         .filter(~Exists(newer))
         .order_by("-created_at")
@@ -104,7 +107,9 @@ def failed_analyses(clinic_id: Any, now: datetime.datetime) -> list[tuple[Any, R
     return found
 
 
-def recent_scores(clinic_id: Any, now: datetime.datetime) -> QuerySet[AnalysisRun]:
+def recent_scores(
+    clinic_id: Any, now: datetime.datetime, patient_id: Any = None
+) -> QuerySet[AnalysisRun]:
     """The newest few scores per (patient, exercise), for pairs whose newest run is recent.
 
     Rows come newest first within each pair (`position` 1 is the newest).
@@ -116,7 +121,7 @@ def recent_scores(clinic_id: Any, now: datetime.datetime) -> QuerySet[AnalysisRu
         created_at__gt=OuterRef("created_at"),
     )
     return (
-        clinic_runs(clinic_id)
+        clinic_runs(clinic_id, patient_id)
         .filter(status=RunStatus.SUCCEEDED, recording__exercise__isnull=False)
         .filter(recording__uploaded_at__gte=now - _days(TREND_WITHIN_DAYS))
         .filter(~Exists(newer_success))  # a re-analysed recording counts once, by its newest run
@@ -137,11 +142,13 @@ def recent_scores(clinic_id: Any, now: datetime.datetime) -> QuerySet[AnalysisRu
     )
 
 
-def falling_scores(clinic_id: Any, now: datetime.datetime) -> list[tuple[Any, Reason]]:
+def falling_scores(
+    clinic_id: Any, now: datetime.datetime, patient_id: Any = None
+) -> list[tuple[Any, Reason]]:
     found: list[tuple[Any, Reason]] = []
     newest: dict | None = None
     earlier: list[float] = []
-    for row in recent_scores(clinic_id, now).iterator(chunk_size=5000):
+    for row in recent_scores(clinic_id, now, patient_id).iterator(chunk_size=5000):
         if row["position"] == 1:
             found += falling(newest, earlier)
             newest, earlier = row, []
@@ -166,7 +173,9 @@ def falling(newest: dict | None, earlier: list[float]) -> list[tuple[Any, Reason
     return [(newest["recording__patient_id"], reason)]
 
 
-def missed_sessions(clinic_id: Any, today: datetime.date) -> list[tuple[Any, Reason]]:
+def missed_sessions(
+    clinic_id: Any, today: datetime.date, patient_id: Any = None
+) -> list[tuple[Any, Reason]]:
     window_start = today - _days(ADHERENCE_WINDOW_DAYS - 1)
     prescriptions = (
         Prescription.objects.filter(
@@ -185,7 +194,9 @@ def missed_sessions(clinic_id: Any, today: datetime.date) -> list[tuple[Any, Rea
             "end_date",
         )
     )
-    done = session_days(clinic_id, window_start, today)
+    if patient_id is not None:
+        prescriptions = prescriptions.filter(patient_id=patient_id)
+    done = session_days(clinic_id, window_start, today, patient_id=patient_id)
     found = []
     for row in prescriptions.iterator(chunk_size=2000):
         period = Period(
@@ -224,17 +235,22 @@ def session_days(
 
 
 def patients_needing_attention(
-    clinic_id: Any, now: datetime.datetime | None = None
+    clinic_id: Any, now: datetime.datetime | None = None, patient_id: Any = None
 ) -> list[Attention]:
-    """Patients with at least one reason, the most urgent first (three queries in all)."""
+    """Patients with at least one reason, the most urgent first (three queries in all).
+
+    Computed from the runs, recordings and prescriptions; the home page reads the stored copy
+    (`webapp.dashboard.precompute`). `patient_id`: that patient only (the update after a run).
+    """
     if clinic_id is None:
         return []
     now = now or timezone.now()
-    found = failed_analyses(clinic_id, now) + falling_scores(clinic_id, now)
-    found += missed_sessions(clinic_id, timezone.localdate(now))
+    found = failed_analyses(clinic_id, now, patient_id)
+    found += falling_scores(clinic_id, now, patient_id)
+    found += missed_sessions(clinic_id, timezone.localdate(now), patient_id)
     by_patient: dict[Any, Attention] = {}
-    for patient_id, reason in found:
-        by_patient.setdefault(patient_id, Attention(patient_id)).reasons.append(reason)
+    for flagged, reason in found:
+        by_patient.setdefault(flagged, Attention(flagged)).reasons.append(reason)
     for entry in by_patient.values():
         entry.reasons.sort(key=lambda r: -r.urgency)
     return sorted(by_patient.values(), key=lambda a: -a.urgency)

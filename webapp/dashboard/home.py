@@ -16,8 +16,8 @@ from django.utils import timezone
 
 from webapp.accounts.models import User
 from webapp.accounts.permissions import visible_patients, visible_recordings
-from webapp.dashboard.attention import ADHERENCE_WINDOW_DAYS, Attention, Period, session_days
-from webapp.dashboard.attention import patients_needing_attention as attention_of_clinic
+from webapp.dashboard.attention import ADHERENCE_WINDOW_DAYS, Period, session_days
+from webapp.dashboard.precompute import read_page
 from webapp.patients.adherence import prescribed_sessions
 from webapp.patients.models import Patient, Prescription
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
@@ -58,14 +58,11 @@ def active_runs(user: User, limit: int = ACTIVE_RUNS) -> list[AnalysisRun]:
 
 
 def attention_page(user: User, page_number: Any) -> Page:
-    """One page of the patients needing attention, with their names (two queries per page)."""
-    entries: list[Attention] = attention_of_clinic(user.clinic_id)
-    page = Paginator(entries, ATTENTION_PER_PAGE).get_page(page_number)
-    shown = {entry.patient_id: entry for entry in page.object_list}
-    for patient in Patient.objects.filter(pk__in=shown).only("pk", "display_name"):
-        shown[patient.pk].patient = patient
-    page.object_list = [entry for entry in page.object_list if entry.patient is not None]
-    return page
+    """One page of the patients needing attention, from the stored list (two queries per page,
+    whatever the clinic's size; `webapp.dashboard.precompute` keeps it up to date)."""
+    if user.clinic_id is None:
+        return Paginator([], ATTENTION_PER_PAGE).get_page(1)
+    return read_page(user.clinic_id, page_number, ATTENTION_PER_PAGE)
 
 
 def my_patients(user: User, limit: int = MY_PATIENTS) -> list[Patient]:

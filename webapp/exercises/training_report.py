@@ -116,6 +116,7 @@ def key_poses(report: Mapping[str, Any], names: Mapping[str, str]) -> dict[str, 
         "classifier": classifier_words(data["classifier"]) if data.get("classifier") else None,
         "refining": refining_words(data["refining"]) if data.get("refining") else None,
         "patterns": [pattern_words(p, names) for p in data.get("periodic_patterns") or ()],
+        "precision": percent(data.get("cross_validated_precision")),
     }
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from drf_spectacular.utils import extend_schema, inline_serializer
+from drf_spectacular.utils import OpenApiResponse, extend_schema, inline_serializer
 from rest_framework import serializers, status
 from rest_framework.request import Request
 from rest_framework.response import Response
@@ -26,7 +26,13 @@ LIVE_SESSION_CREATED = inline_serializer(
 class LiveSessionCreate(APIView):
     """Open a live session; stream frames to its WebSocket (see `analysis.online.session`)."""
 
-    @extend_schema(request=LiveSessionRequest, responses={201: LIVE_SESSION_CREATED})
+    @extend_schema(
+        request=LiveSessionRequest,
+        responses={
+            201: LIVE_SESSION_CREATED,
+            404: OpenApiResponse(description="No such patient or exercise in your clinic."),
+        },
+    )
     def post(self, request: Request) -> Response:
         data = LiveSessionRequest(data=request.data)
         data.is_valid(raise_exception=True)

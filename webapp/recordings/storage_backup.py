@@ -5,7 +5,8 @@ The archive (`.tar.gz`) holds:
 - `db.json`: every row (`dumpdata --all --natural-foreign`, so soft-deleted patients are kept and
   content types are matched by name, which makes it loadable into any freshly migrated database,
   SQLite or PostgreSQL);
-- `media/...`: every file under MEDIA_ROOT (uploads, result arrays, tutors, exercise models);
+- `media/...`: every stored file (uploads, result arrays, tutors, exercise models, reports), read
+  through Django's default storage: the folder MEDIA_ROOT, or the S3 bucket when S3_BUCKET is set;
 - `manifest.json`: format, date, code version, database vendor, the number of rows per model,
   and the SHA-256 and size of `db.json` and of every media file.
 
@@ -27,7 +28,8 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from django.apps import apps
-from django.conf import settings
+from django.core.files.base import ContentFile
+from django.core.files.storage import FileSystemStorage, default_storage
 from django.core.management import call_command
 from django.db import connection
 
@@ -48,14 +50,31 @@ def sha256_file(path: Path) -> str:
     return digest.hexdigest()
 
 
-def media_files(root: Path) -> dict[str, dict[str, Any]]:
-    """Relative POSIX path → {sha256, size} of every file under MEDIA_ROOT."""
-    if not root.exists():
-        return {}
+def stored_names(storage=default_storage, folder: str = "") -> list[str]:
+    """Every file name in the storage (the media folder or the bucket), sorted."""
+    try:
+        folders, files = storage.listdir(folder)
+    except FileNotFoundError:  # no media folder yet
+        return []
+    names = [f"{folder}/{name}" if folder else name for name in files]
+    for sub in folders:
+        names += stored_names(storage, f"{folder}/{sub}" if folder else sub)
+    return sorted(names)
+
+
+def stored_bytes(name: str, storage=default_storage) -> bytes:
+    with storage.open(name, "rb") as handle:
+        return handle.read()
+
+
+def media_files(storage: Any = default_storage) -> dict[str, dict[str, Any]]:
+    """Storage name → {sha256, size} of every stored file (`storage` may be a folder too)."""
+    if isinstance(storage, str | Path):
+        storage = FileSystemStorage(location=storage)
     found = {}
-    for path in sorted(p for p in root.rglob("*") if p.is_file()):
-        relative = path.relative_to(root).as_posix()
-        found[relative] = {"sha256": sha256_file(path), "size": path.stat().st_size}
+    for name in stored_names(storage):
+        content = stored_bytes(name, storage)
+        found[name] = {"sha256": hashlib.sha256(content).hexdigest(), "size": len(content)}
     return found
 
 
@@ -91,19 +110,18 @@ def build_manifest(db_path: Path, dump: list, files: dict[str, dict[str, Any]]) 
 
 def backup(output: Path) -> dict[str, Any]:
     """Write the archive to `output` (atomically: a half-written archive never has its name)."""
-    media_root = Path(settings.MEDIA_ROOT)
     output.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as work:
         db_path = Path(work) / "db.json"
         dump = dump_database(db_path)
-        files = media_files(media_root)
+        files = media_files()
         manifest = build_manifest(db_path, dump, files)
         partial = output.with_name(output.name + ".partial")
         with tarfile.open(partial, "w:gz") as archive:
             add_bytes(archive, "manifest.json", json.dumps(manifest, indent=1).encode())
             archive.add(db_path, arcname="db.json")
             for relative in files:
-                archive.add(media_root / relative, arcname=f"media/{relative}")
+                add_bytes(archive, f"media/{relative}", stored_bytes(relative))
         os.replace(partial, output)
     return manifest
 
@@ -132,12 +150,12 @@ def member_bytes(archive: tarfile.TarFile, name: str) -> bytes:
     return handle.read()
 
 
-def safe_media_path(root: Path, relative: str) -> Path:
-    """Where a media file goes; refuses names that would escape MEDIA_ROOT."""
+def safe_media_name(relative: str) -> str:
+    """The storage name of a file of the archive; refuses names that would escape the storage."""
     pure = PurePosixPath(relative)
     if pure.is_absolute() or ".." in pure.parts:
         raise BackupError(f"Refusing the unsafe file name {relative!r} in the archive.")
-    return root.joinpath(*pure.parts)
+    return pure.as_posix()
 
 
 def verify_archive(archive: tarfile.TarFile, manifest: dict[str, Any]) -> bytes:
@@ -166,17 +184,22 @@ def ensure_empty(labels) -> None:
         raise BackupError(f"Restore only into an empty database; this one has rows in {shown}.")
 
 
-def write_media(archive: tarfile.TarFile, manifest: dict[str, Any], root: Path) -> None:
+def write_media(
+    archive: tarfile.TarFile, manifest: dict[str, Any], storage=default_storage
+) -> None:
     for relative, facts in manifest["files"].items():
-        target = safe_media_path(root, relative)
-        if target.exists() and sha256_file(target) != facts["sha256"]:
-            raise BackupError(f"{target} exists with other content; not overwriting it.")
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_bytes(member_bytes(archive, f"media/{relative}"))
+        name = safe_media_name(relative)
+        if storage.exists(name):
+            if hashlib.sha256(stored_bytes(name, storage)).hexdigest() != facts["sha256"]:
+                raise BackupError(f"{name} exists with other content; not overwriting it.")
+            continue
+        saved = storage.save(name, ContentFile(member_bytes(archive, f"media/{relative}")))
+        if saved != name:
+            raise BackupError(f"{name} could not be written under its own name ({saved}).")
 
 
 def restore(path: Path) -> dict[str, Any]:
-    """Restore an archive into this (empty) database and MEDIA_ROOT; returns the manifest."""
+    """Restore an archive into this (empty) database and the storage; returns the manifest."""
     with tarfile.open(path, "r:gz") as archive:
         manifest = read_manifest(archive)
         database = verify_archive(archive, manifest)
@@ -186,7 +209,7 @@ def restore(path: Path) -> dict[str, Any]:
             db_path = Path(work) / "db.json"
             db_path.write_bytes(database)
             call_command("loaddata", str(db_path), verbosity=0)
-        write_media(archive, manifest, Path(settings.MEDIA_ROOT))
+        write_media(archive, manifest)
     check_restored(manifest)
     return manifest
 
@@ -198,7 +221,7 @@ def check_restored(manifest: dict[str, Any]) -> None:
     }
     if wrong:
         raise BackupError(f"Row counts differ after the restore (expected, found): {wrong}")
-    root = Path(settings.MEDIA_ROOT)
     for relative, facts in manifest["files"].items():
-        if sha256_file(safe_media_path(root, relative)) != facts["sha256"]:
+        content = stored_bytes(safe_media_name(relative))
+        if hashlib.sha256(content).hexdigest() != facts["sha256"]:
             raise BackupError(f"The restored file {relative} does not match its checksum.")

@@ -1,0 +1,170 @@
+"""Typed OpenAPI descriptions of the API answers built as plain dicts (progress, prescriptions,
+results-page data, corrections), and the normalisation those answers go through: datetimes as
+ISO 8601 UTC with `Z`, numbers rounded (`webapp.api.numbers`). Keys the builders add later pass
+through untouched; the serializers here describe them, they do not filter them."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rest_framework import serializers
+
+from webapp.api.numbers import rounded, utc_iso
+from webapp.api.serializers import (
+    AngleRangeSerializer,
+    AssessmentSerializer,
+    GuidanceSerializer,
+    LandmarkSerializer,
+    UTCDateTimeField,
+)
+
+
+class ProgressPointSerializer(serializers.Serializer):
+    run = serializers.UUIDField()
+    recording = serializers.UUIDField()
+    exercise = serializers.UUIDField(allow_null=True)
+    exercise_name = serializers.CharField(allow_null=True)
+    date = UTCDateTimeField()
+    score = serializers.FloatField(allow_null=True)
+    repetitions = serializers.IntegerField()
+    range_of_motion = serializers.DictField(child=serializers.FloatField())
+    gamma = serializers.DictField(child=serializers.FloatField())
+    pain_score = serializers.IntegerField(allow_null=True)
+    clinical_angles = serializers.DictField(child=AngleRangeSerializer())
+    workspace = serializers.DictField(child=serializers.FloatField(), required=False)
+
+
+class ProgressSerializer(serializers.Serializer):
+    patient = serializers.UUIDField()
+    points = ProgressPointSerializer(many=True)
+
+
+def progress_body(patient_id: Any, points: list[dict[str, Any]]) -> dict[str, Any]:
+    return {
+        "patient": str(patient_id),
+        "points": [{**rounded(p), "date": utc_iso(p.get("date"))} for p in points],
+    }
+
+
+class AdherenceSerializer(serializers.Serializer):
+    prescription = serializers.CharField()
+    exercise = serializers.CharField()
+    exercise_name = serializers.CharField()
+    sessions_prescribed = serializers.IntegerField()
+    sessions_done = serializers.IntegerField()
+    percent = serializers.FloatField(allow_null=True)
+
+
+class PrescriptionSerializer(serializers.Serializer):
+    id = serializers.UUIDField()
+    exercise = serializers.UUIDField()
+    exercise_name = serializers.CharField()
+    sessions_per_week = serializers.IntegerField()
+    target_repetitions = serializers.IntegerField(allow_null=True)
+    start_date = serializers.DateField()
+    end_date = serializers.DateField(allow_null=True)
+    adherence = AdherenceSerializer()
+
+
+class PrescriptionsSerializer(serializers.Serializer):
+    patient = serializers.UUIDField()
+    prescriptions = PrescriptionSerializer(many=True)
+
+
+class ResultRepetitionSerializer(serializers.Serializer):
+    start = serializers.IntegerField()
+    end = serializers.IntegerField()
+    score = serializers.FloatField()
+    passed = serializers.BooleanField(allow_null=True, help_text="by the exercise's threshold")
+    guidance = GuidanceSerializer(many=True, required=False)
+    alignment_tau = serializers.FloatField(required=False, allow_null=True)
+    similarity = serializers.FloatField(required=False, allow_null=True)
+
+
+class NamedAssessmentSerializer(AssessmentSerializer):
+    type_name = serializers.CharField()
+
+
+class CommentSerializer(serializers.Serializer):
+    frame = serializers.IntegerField()
+    text = serializers.CharField()
+    tip = serializers.CharField(required=False)
+
+
+class MetricsSerializer(serializers.Serializer):
+    score = serializers.FloatField()
+    repetition_count = serializers.IntegerField()
+    tempo = serializers.FloatField(allow_null=True)
+    range_of_motion = serializers.DictField(child=serializers.FloatField())
+    frames = serializers.IntegerField()
+    fps = serializers.FloatField()
+    mirrored = serializers.BooleanField()
+
+
+class SimilarRecordingSerializer(serializers.Serializer):
+    recording = serializers.UUIDField()
+    patient = serializers.UUIDField()
+    patient_name = serializers.CharField()
+    uploaded_at = UTCDateTimeField()
+    distance = serializers.FloatField()
+
+
+class ResultDataSerializer(serializers.Serializer):
+    """The results page's data; the analysis parts are there once the run succeeded."""
+
+    recording = serializers.UUIDField()
+    exercise = serializers.UUIDField(allow_null=True)
+    run = serializers.UUIDField(allow_null=True)
+    status = serializers.ChoiceField(
+        choices=["queued", "running", "succeeded", "failed"], allow_null=True
+    )
+    model_version = serializers.IntegerField(required=False, allow_null=True)
+    code_version = serializers.CharField(required=False)
+    repetitions = ResultRepetitionSerializer(many=True, required=False)
+    pass_threshold = serializers.FloatField(required=False, allow_null=True)
+    landmarks = LandmarkSerializer(many=True, required=False)
+    assessment = NamedAssessmentSerializer(many=True, required=False)
+    feedback = CommentSerializer(many=True, required=False)
+    metrics = MetricsSerializer(required=False)
+    gamma = serializers.DictField(child=serializers.FloatField(), required=False)
+    similar = SimilarRecordingSerializer(many=True, required=False)
+
+
+def result_body(data: dict[str, Any]) -> dict[str, Any]:
+    body = rounded(data)
+    if "similar" in body:
+        body["similar"] = [{**s, "uploaded_at": utc_iso(s["uploaded_at"])} for s in body["similar"]]
+    return body
+
+
+class LandmarkFixSerializer(serializers.Serializer):
+    frames = serializers.ListField(child=serializers.IntegerField())
+    types = serializers.ListField(child=serializers.IntegerField())
+
+
+class LevelFixSerializer(serializers.Serializer):
+    frame = serializers.IntegerField()
+    joint = serializers.CharField()
+    level = serializers.IntegerField()
+
+
+class VerdictSerializer(serializers.Serializer):
+    index = serializers.IntegerField()
+    passed = serializers.BooleanField()
+
+
+class CorrectionsSerializer(serializers.Serializer):
+    run = serializers.UUIDField(allow_null=True)
+    landmarks = LandmarkFixSerializer(required=False, allow_null=True)
+    levels = LevelFixSerializer(many=True, required=False)
+    repetitions = VerdictSerializer(many=True, required=False)
+
+
+class SavedCountsSerializer(serializers.Serializer):
+    landmarks = serializers.IntegerField()
+    levels = serializers.IntegerField()
+    repetitions = serializers.IntegerField()
+
+
+class CorrectionsSavedSerializer(CorrectionsSerializer):
+    saved = SavedCountsSerializer()
