@@ -11,12 +11,25 @@ from __future__ import annotations
 import datetime
 import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from django.utils import timezone
 
 from webapp.patients.models import Prescription
 from webapp.recordings.models import Recording
+
+
+class PrescribedPeriod(Protocol):
+    """What counting prescribed sessions needs: a `Prescription`, or a period built from one."""
+
+    @property
+    def start_date(self) -> datetime.date: ...
+
+    @property
+    def end_date(self) -> datetime.date | None: ...
+
+    @property
+    def sessions_per_week(self) -> int: ...
 
 
 @dataclass(frozen=True)
@@ -32,7 +45,7 @@ class Adherence:
         return asdict(self)
 
 
-def prescribed_sessions(prescription: Prescription, today: datetime.date) -> int:
+def prescribed_sessions(prescription: PrescribedPeriod, today: datetime.date) -> int:
     end = min(today, prescription.end_date) if prescription.end_date else today
     days = (end - prescription.start_date).days + 1
     if days <= 0:
