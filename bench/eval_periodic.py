@@ -20,7 +20,7 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from analysis.periodic.sequence import PAPER_GA, PAPER_GA_K, TUNED_GA_K, clean
-from analysis.periodic.synthetic import (
+from bench.periodic_sequences import (
     PeriodicSample,
     PeriodicScores,
     RandomPeriodicOptions,

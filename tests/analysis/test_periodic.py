@@ -38,7 +38,7 @@ from analysis.periodic.ga import (
     tournament_selection,
 )
 from analysis.periodic.sequence import PAPER_GA, PAPER_GA_K, TUNED_GA_K, clean, naive_psa
-from analysis.periodic.synthetic import (
+from bench.periodic_sequences import (
     Confusion,
     PeriodicSample,
     RandomPeriodicOptions,
