@@ -305,6 +305,13 @@ SPECTACULAR_SETTINGS = {
     "SWAGGER_UI_DIST": "SIDECAR",
     "SWAGGER_UI_FAVICON_HREF": "SIDECAR",
     "REDOC_DIST": "SIDECAR",
+    # Several "status" fields: each set of states gets its own schema name.
+    "ENUM_NAME_OVERRIDES": {
+        "AnalysisStatusEnum": "webapp.recordings.models.RunStatus",
+        "ModelStatusEnum": "webapp.exercises.models.ModelStatus",
+        "LiveSessionStatusEnum": "webapp.live.models.LiveStatus",
+        "RecordingStatusEnum": "webapp.api.serializers.RUN_STATES",
+    },
 }
 
 LOGGING = {

@@ -18,13 +18,17 @@ DOCS = Path(__file__).resolve().parents[2] / "docs" / "img"
 
 
 def fail_newest_run(patient_name: str):
-    """A re-analysis of the patient's newest recording that failed."""
+    """A re-analysis of the patient's newest recording that failed (written with the ORM, so the
+    stored attention list is refreshed as the worker that finishes a run refreshes it)."""
+    from webapp.dashboard.precompute import refresh_after_run
     from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 
     recording = Recording.objects.filter(patient__display_name=patient_name).first()
-    return AnalysisRun.objects.create(
+    run = AnalysisRun.objects.create(
         recording=recording, status=RunStatus.FAILED, user_error="The file could not be read."
     )
+    refresh_after_run(run.pk)
+    return run
 
 
 def queue_run(patient_name: str):
