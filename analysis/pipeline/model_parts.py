@@ -31,9 +31,9 @@ from analysis.pipeline.gestures import align_gesture, score_scale, wooe_options
 
 FloatArray = npt.NDArray[np.float64]
 COLD_THRESHOLD = 50.0
-WEIGHT_GENERATIONS = 15
-WEIGHT_FPS = 15.0  # joint weights decide which joints matter: a coarse timeline is enough
-WARPED_COPIES = 4
+WEIGHT_GENERATIONS = 8
+WEIGHT_FPS = 10.0  # joint weights decide which joints matter: a coarse timeline is enough
+WARPED_COPIES = 3
 CV_FOLDS = 3
 
 
