@@ -32,7 +32,8 @@ def _linear(frames: FloatArray, source: FloatArray, target: FloatArray) -> Float
     return out
 
 
-def _full_rotation_joints(motion: Motion) -> list[tuple[int, list[int], str]]:
+def full_rotation_joints(motion: Motion) -> list[tuple[int, list[int], str]]:
+    """Joints with three rotation channels: (joint, their frame columns, Euler order)."""
     joints = []
     skeleton = motion.skeleton
     for joint, (start, channels) in enumerate(
@@ -63,7 +64,7 @@ def resample(motion: Motion, fps: float) -> Motion:
     source = np.arange(motion.n_frames, dtype=np.float64) * motion.frame_time
     target = sample_times(motion.n_frames, motion.frame_time, fps)
     frames = _linear(motion.frames, source, target)
-    full = _full_rotation_joints(motion)
+    full = full_rotation_joints(motion)
     if full:
         joint_ids = [j for j, _, _ in full]
         slerped = _slerped(rotations(motion)[:, joint_ids], target / motion.frame_time)

@@ -10,6 +10,7 @@ import numpy as np
 from analysis.bvh import Motion
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics import resample, rotations
+from analysis.kinematics.resample import full_rotation_joints
 
 EXPECTED = {
     ("tempo", 0.6): "too fast",
@@ -25,18 +26,6 @@ def retimed(motion: Motion, factor: float) -> Motion:
     return resample(stretched, motion.fps)
 
 
-def _rotation_columns(motion: Motion) -> list[tuple[int, list[int], str]]:
-    out = []
-    skeleton = motion.skeleton
-    for joint, (start, channels) in enumerate(
-        zip(skeleton.channel_starts, skeleton.channels, strict=True)
-    ):
-        cols = [int(start) + k for k, c in enumerate(channels) if c.endswith("rotation")]
-        if len(cols) == 3:
-            out.append((joint, cols, "".join(channels[c - int(start)][0] for c in cols)))
-    return out
-
-
 def range_scaled(motion: Motion, factor: float) -> Motion:
     """Every joint's rotation away from its first-frame rotation scaled by ``factor`` (angle
     about the same axis); the root's translation is kept."""
@@ -45,7 +34,7 @@ def range_scaled(motion: Motion, factor: float) -> Motion:
     relative = quat.multiply(quat.conjugate(rest), q)
     scaled = quat.multiply(rest, quat.from_rotvec(factor * quat.to_rotvec(relative)))
     frames = motion.frames.copy()
-    for joint, cols, order in _rotation_columns(motion):
+    for joint, cols, order in full_rotation_joints(motion):
         angles = quat.to_euler(scaled[:, joint], order)
         frames[:, cols] = angles + 360.0 * np.round((frames[:, cols] - angles) / 360.0)
     return motion.with_frames(frames)
