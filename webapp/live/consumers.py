@@ -113,18 +113,19 @@ class LiveConsumer(AsyncWebsocketConsumer):
             await database_sync_to_async(services.mark_live)(self.live)
         return state
 
-    async def _finish(self, state: SessionState, summary: dict[str, Any]) -> dict[str, Any]:
-        """Store the frames as a Recording (the pipeline analyses it) and end the session."""
+    async def _finish(self, state: SessionState, closing: dict[str, Any]) -> dict[str, Any]:
+        """Store the frames as a Recording (the pipeline analyses it) and end the session;
+        ``closing`` is the session's summary event, completed here."""
         lat = sorted(state.delivery_ms)
         if lat:
-            summary["latency_ms_p95"] = lat[min(len(lat) - 1, int(0.95 * len(lat)))]
+            closing["latency_ms_p95"] = lat[min(len(lat) - 1, int(0.95 * len(lat)))]
         recording = await database_sync_to_async(services.store_frames)(
             self.live, state.bvh(), self.user
         )
-        summary["recording"] = None if recording is None else str(recording.pk)
-        await database_sync_to_async(services.finish)(self.live, summary, recording)
+        closing["recording"] = None if recording is None else str(recording.pk)
+        await database_sync_to_async(services.finish)(self.live, closing, recording)
         SESSIONS.pop(self.key, None)
-        return summary
+        return closing
 
     async def _broadcast(self, state: SessionState, event: dict[str, Any]) -> None:
         if event["event"] == "position" and state.aligner is not None:

@@ -47,12 +47,12 @@ def offline_figures(run: AnalysisRun | None) -> dict[str, Any] | None:
     if run is None:
         return None
     out: dict[str, Any] = {"status": run.status, "progress": run.progress}
-    if run.status == RunStatus.SUCCEEDED:
-        reps = run.summary.get("repetitions", [])
+    result = run.result if run.status == RunStatus.SUCCEEDED else None
+    if result is not None:
         out["repetitions"] = [
-            {"start": r.get("start"), "end": r.get("end"), "score": r.get("score")} for r in reps
+            {"start": r.start, "end": r.end, "score": r.score} for r in result.repetitions
         ]
-        out["score"] = run.summary.get("score")
+        out["score"] = result.score
     return out
 
 
