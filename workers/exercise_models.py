@@ -10,7 +10,7 @@ from django.db import transaction
 from django.utils import timezone
 
 from analysis import __version__ as code_version
-from analysis.pipeline import FittedModel, build_model, dump_model, load_model
+from analysis.pipeline import FittedModel, ModelVersionError, build_model, dump_model, load_model
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from workers import training
 
@@ -45,11 +45,12 @@ def save_fitted(row: ExerciseModel, fitted: FittedModel) -> None:
     row.save()
 
 
-def build_now(exercise: Exercise) -> tuple[ExerciseModel, FittedModel]:
-    """Build and activate a new version in this process (cold start from the tutor)."""
+def build_now(exercise: Exercise, stale: Any = None) -> tuple[ExerciseModel, FittedModel]:
+    """Build and activate a new version in this process (cold start from the tutor), unless
+    another process already activated one other than the ``stale`` row's id."""
     with transaction.atomic():
         locked = Exercise.objects.select_for_update().get(pk=exercise.pk)
-        if locked.active_model_id is not None:
+        if locked.active_model_id is not None and locked.active_model_id != stale:
             row = ExerciseModel.objects.get(pk=locked.active_model_id)
             return row, load_row(row)
         row = ExerciseModel.objects.create_next_version(locked, status=ModelStatus.RUNNING)
@@ -73,7 +74,11 @@ def active_model(exercise: Exercise) -> tuple[ExerciseModel, Any]:
     if exercise.active_model_id is None:
         return build_now(exercise)
     row = ExerciseModel.objects.get(pk=exercise.active_model_id)
-    return row, load_row(row)
+    try:
+        return row, load_row(row)
+    except ModelVersionError:
+        # written by an earlier version of the analysis code: fit it again from the same tutor
+        return build_now(exercise, stale=row.pk)
 
 
 def build_version(model_id: str) -> str:

@@ -130,6 +130,11 @@ def tutor_gesture_scale(
         align_gesture(tutor_q[a : b + 1], tutor_q[c : d + 1], weights).mean_cost
         for (a, b), (c, d) in itertools.combinations(reps[:6], 2)
     ]
+    if not costs:  # one repetition: its cost against itself a tenth of a repetition later
+        a, b = reps[0]
+        shift = max(1, (b - a) // 10)
+        moved = tutor_q[min(a + shift, b) : b + 1]
+        costs = [align_gesture(tutor_q[a : b + 1], moved, weights).mean_cost]
     return score_scale(costs)
 
 
