@@ -15,6 +15,18 @@ from tests.webapp.conftest import (  # noqa: F401 (fixtures shared with the web 
 TUTOR = "sessions/m07_s01_correct.bvh.gz"
 
 
+@pytest.fixture(autouse=True)
+def _fresh_channel_layer():
+    """A new channel layer per test: each test drives the consumer from its own event loop, and
+    the Redis layer (used when REDIS_URL is set) binds its locks to the loop that first used it;
+    a server process has one loop for its whole life."""
+    from channels.layers import channel_layers
+
+    channel_layers.backends.clear()
+    yield
+    channel_layers.backends.clear()
+
+
 @pytest.fixture(scope="session")
 def live_model() -> FittedModel:
     """The shoulder-abduction model built once from its UI-PRMD tutor (a few seconds)."""
