@@ -17,9 +17,9 @@ from analysis.adjustment.affine import (
 )
 from analysis.assessment import tutor_mean_poses
 from analysis.bvh import read
-from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.kinematics import forward, rotations
 from analysis.kinematics import quaternions as quat
+from tests.synthetic_motion import SyntheticConfig, generate
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 JUMP = 20.0  # degrees between consecutive frames

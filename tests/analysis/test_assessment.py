@@ -13,9 +13,9 @@ from analysis.assessment.joints import (
     pose_difference_features,
     tutor_mean_poses,
 )
-from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics import rotations
+from tests.synthetic_motion import SyntheticConfig, generate
 
 
 def test_mean_of_symmetric_rotations_is_their_centre_whatever_the_signs():

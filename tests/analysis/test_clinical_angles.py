@@ -16,8 +16,8 @@ from analysis.clinical import (
     clinical_angles,
     norm_for,
 )
-from analysis.clinical.synthetic import MIXAMO_NAMES, posed, rot
 from analysis.pipeline.results import AngleRange
+from tests.synthetic_poses import MIXAMO_NAMES, posed, rot
 
 UI_PRMD = Path(__file__).resolve().parents[2] / "data" / "ui-prmd" / "sessions"
 TOL = 2.0
@@ -90,7 +90,7 @@ def test_mixamo_names_give_the_same_angles():
 
 
 def test_angles_a_skeleton_cannot_give_are_absent():
-    from analysis.bvh.synthetic import skeleton  # no feet, no collars, legs end at the knee
+    from tests.synthetic_motion import skeleton  # no feet, no collars, legs end at the knee
 
     sk = skeleton()
     from analysis.bvh import Motion

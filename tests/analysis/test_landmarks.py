@@ -6,7 +6,6 @@ from sklearn.dummy import DummyClassifier
 from sklearn.ensemble import AdaBoostClassifier
 from sklearn.tree import DecisionTreeClassifier
 
-from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.landmarks.detector import (
     Boosted,
     LandmarkDetector,
@@ -26,6 +25,7 @@ from analysis.landmarks.identification import (
 )
 from analysis.landmarks.refining import Candidates
 from analysis.landmarks.signature import pose_series
+from tests.synthetic_motion import SyntheticConfig, generate
 
 
 def test_training_frames_eq_5_11_landmarks_plus_three_times_as_many_others():

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from analysis.bvh import RecordingTooShortError, SkeletonMismatchError, read
-from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.pipeline import ModelVersionError, analyse, build_model, dump_model, load_model
 from analysis.pipeline.model import FORMAT_VERSION
+from tests.synthetic_motion import SyntheticConfig, generate
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 FIELDS = {"frames", "fps", "landmarks", "repetitions", "score", "assessment", "feedback",

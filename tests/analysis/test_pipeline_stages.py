@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from analysis.bvh import Motion, Skeleton, read
-from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.pipeline import analyse, build_model
 from analysis.pipeline.run import STAGES
+from tests.synthetic_motion import SyntheticConfig, generate
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 PAPER_STAGES = (

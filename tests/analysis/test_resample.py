@@ -4,10 +4,10 @@ rotations along the shortest arc."""
 import numpy as np
 import pytest
 
-from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.kinematics import positions, rotations
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics.resample import resample, sample_times
+from tests.synthetic_motion import SyntheticConfig, generate
 
 
 @pytest.fixture(scope="module")

@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.landmarks.signature import (
     MotionSignature,
     SignatureOptions,
@@ -16,6 +15,7 @@ from analysis.landmarks.signature import (
     pose_series,
     smooth,
 )
+from tests.synthetic_motion import SyntheticConfig, generate
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import pytest
 
 from analysis.bvh import Skeleton, SkeletonMismatchError, read
 from analysis.bvh.rigs import identify, parse_name
-from analysis.bvh.synthetic import skeleton as synthetic_skeleton
+from tests.synthetic_motion import skeleton as synthetic_skeleton
 
 # Per rig: (name, parent) in file order; expected role → name.
 ARM_LEG = ("upper_arm", "forearm", "hand", "upper_leg", "lower_leg", "foot")

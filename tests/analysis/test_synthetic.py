@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from analysis.bvh.synthetic import SyntheticConfig, generate
 from analysis.kinematics import joint_angles, positions
+from tests.synthetic_motion import SyntheticConfig, generate
 
 
 def test_same_seed_same_performance_other_seed_differs():

@@ -9,7 +9,7 @@ import pytest
 
 from analysis.bvh import read
 from analysis.clinical import QUADRANTS, reachable_workspace, workspace_from_points
-from analysis.clinical.synthetic import posed, rot
+from tests.synthetic_poses import posed, rot
 
 UI_PRMD = Path(__file__).resolve().parents[2] / "data" / "ui-prmd" / "sessions"
 
