@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 PORT ?= 8000
 PYTEST_ARGS ?=
 
-.PHONY: run worker beat test test-analysis lint format bench bench-browser fuzz migrate demo clean
+.PHONY: run worker beat test test-analysis lint format bench bench-browser bench-live fuzz migrate demo clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -33,8 +33,10 @@ migrate: deps
 demo: migrate
 	$(BIN)/python manage.py load_demo
 
+# The server and a real Celery worker beside it, on a broker folder in var/ (workers/local.py);
+# WORKER_CONCURRENCY analyses at a time (2). With REDIS_URL set, both use Redis instead.
 run: demo
-	$(BIN)/python manage.py runserver 127.0.0.1:$(PORT)
+	$(BIN)/python -m workers.local 127.0.0.1:$(PORT)
 
 # Consumes every queue (analyses, models, reports); WORKER_QUEUES=analyses (comma-separated)
 # starts a dedicated worker, e.g. on another machine (docs/RELIABILITY.md).
@@ -64,6 +66,13 @@ bench: $(VENV)/.stamp-bench
 	$(BIN)/python -m bench.bench_bvh
 	$(BIN)/python -m bench.bench_dtw
 	NUMBA_NUM_THREADS=1 $(BIN)/python -m bench.bench_pipeline
+
+# Concurrent live sessions at 120 frames/s under `make run`'s server and Daphne with the Redis
+# channel layer (Redis on 127.0.0.1:6379), then the live sessions against the offline analysis.
+bench-live: $(VENV)/.stamp-python
+	$(BIN)/python -m bench.bench_live --markdown docs/sections/bench_live.md
+	$(BIN)/python -m bench.eval_live --jobs 2 --markdown docs/sections/eval_live.md
+	$(BIN)/python docs/assemble.py
 
 # Browser figures (frame rate, time to interactive) and screenshots into docs/img/.
 bench-browser: deps

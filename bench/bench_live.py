@@ -1,158 +1,475 @@
-"""Latency of live sessions: frame received → position event sent, at 120 frames/s.
+"""Concurrent live sessions over loopback WebSockets: how many a server keeps up with.
 
-1. Server path: the real ASGI application (Channels consumer, token authentication, the per-session
-   aligner, the channel-layer broadcast to viewers) driven in-process by a WebSocket client that
-   sends a UI-PRMD session's frames at 120 frames/s (its 30 fps frames four times faster, so every
-   frame is aligned); the consumer measures receive → send per position event. Also the
-   client-side round trip (send → position event received).
-2. In-process aligner (``python -m analysis stream --model``): per-frame processing time.
+N capture clients stream a 120 Hz recording (a UI-PRMD session resampled to 120 frames a second,
+as a 120 Hz capture system sends it) at 120 frames/s each, every client with its own live session
+created through ``POST /api/v1/live-sessions/``, against a real server process:
 
-Uses a throw-away in-memory SQLite database.
+- ``runserver``: what ``make run`` serves, ``manage.py runserver`` (Daphne), in-memory channel
+  layer, SQLite;
+- ``redis``: the ASGI server Daphne on ``webapp.asgi:application`` with the Redis channel layer
+  (``REDIS_URL=redis://127.0.0.1:6379/<db>``), SQLite; ``--processes P`` runs P Daphne
+  processes, each on its own port, and the clients spread their sessions over them (a session's
+  connections all go to one process: its aligner lives there), as a sticky load balancer would.
 
-    python -m bench.bench_live [--fps 120] [--session sessions/m07_s03_incorrect.bvh.gz]
+``--batch K`` sends K frames per message (``{"type": "frames", ...}``, as ``python -m analysis
+stream --server`` does: 3 at 120 frames/s); the latency of every frame of a batch is counted
+from the time its first frame was due, so the wait for the batch's other frames is in it.
+
+Per frame that gets an answer (the aligner thins a 120 Hz stream to the exercise model's 30
+frames a second, so every fourth frame is aligned and answered with a position event), the
+client measures frame sent -> position event received: the frame-to-guidance latency. No frame
+lost: no error event (a dropped, out-of-order or refused frame is answered with one), every
+aligned frame answered, and the server holding every frame sent (its ``ready`` event's
+``next_seq`` on a second connection after the stream). N grows (10, 20, 35, 50, 70, 100) until
+p95 passes 50 ms or a frame is lost; the table gives each step and the largest N that passed.
+The clients run in one process on the same machine as the server.
+
+    .venv/bin/python -m bench.bench_live [--servers runserver,redis] [--counts 10,20,35,50]
+        [--seconds 10] [--batch 3] [--processes 2] [--redis-db 14] [--markdown FILE]
+
+``--aligner`` also prints the in-process aligner's time per frame (``stream --model``).
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import datetime as dt
+import json
 import os
 import platform
+import random
+import socket
+import subprocess
+import sys
+import tempfile
 import time
+import urllib.request
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "ui-prmd"
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "data" / "ui-prmd"
 TUTOR = "sessions/m07_s01_correct.bvh.gz"
+SESSION = "sessions/m07_s03_incorrect.bvh.gz"
+TARGET_MS = 50.0
 
 
-def build():
-    from analysis.bvh import read
-    from analysis.pipeline import build_model
+def machine() -> str:
+    """The processor model, core count and memory, e.g. "2-core AMD EPYC, 24 GiB"."""
+    from bench.eval_live import machine as described
 
-    for line in (DATA / "landmarks.csv").read_text().splitlines():
-        if line.startswith(TUTOR):
-            _, frames, types = line.split(",")
-            return build_model(
-                read(DATA / TUTOR),
-                [int(v) for v in frames.split(";")],
-                [int(v) for v in types.split(";")],
+    return described()
+
+
+@dataclass
+class Step:
+    server: str
+    sessions: int
+    p50: float = float("nan")
+    p95: float = float("nan")
+    sent_p95: float = float("nan")  # from the message's send time (without the batch's wait)
+    answered: int = 0
+    expected: int = 0
+    errors: int = 0
+    held: int = 0  # sessions whose server state holds every frame sent
+    server_p95: float = float("nan")  # frame received -> position event sent, in the server
+    server_cpu: float = float("nan")  # processor seconds the server used during the step
+    sent: int = 0
+    seconds: float = 0.0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def lost(self) -> bool:
+        return self.errors > 0 or self.answered < self.expected or self.held < self.sessions
+
+    @property
+    def passed(self) -> bool:
+        return not self.lost and self.p95 <= TARGET_MS
+
+
+# --- the world the server serves --------------------------------------------------------------
+
+SETUP = """
+import json, django
+django.setup()
+from django.core.management import call_command
+call_command("migrate", verbosity=0, interactive=False)
+from tests.personas import make_exercise, make_world
+from webapp.accounts.tokens import issue_token
+from workers.exercise_models import active_model
+w = make_world()
+exercise = make_exercise(w.clinic, "Shoulder abduction", "%s")
+active_model(exercise)  # fitted and stored now, so the server only loads it
+_, key = issue_token(w.therapist, "bench")
+print(json.dumps({"token": key, "patient": str(w.patient.pk), "exercise": str(exercise.pk)}))
+"""
+
+
+def server_env(folder: Path, redis_url: str | None) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("REDIS_URL", "DATABASE_URL")}
+    env.update(DATA_DIR=str(folder), DJANGO_SETTINGS_MODULE="webapp.settings", PYTHONPATH=str(ROOT))
+    if redis_url:
+        env["REDIS_URL"] = redis_url
+    return env
+
+
+def setup_world(env: dict[str, str]) -> dict[str, str]:
+    out = subprocess.run(
+        [sys.executable, "-c", SETUP % TUTOR], env=env, cwd=ROOT, check=True,
+        capture_output=True, text=True,
+    )  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def start_server(kind: str, env: dict[str, str], port: int, log: Path) -> subprocess.Popen:
+    if kind == "runserver":
+        argv = [sys.executable, "manage.py", "runserver", f"127.0.0.1:{port}", "--noreload"]
+    else:
+        argv = [sys.executable, "-m", "daphne", "-b", "127.0.0.1", "-p", str(port),
+                "-v", "0", "webapp.asgi:application"]  # fmt: skip
+    handle = log.open("w")
+    proc = subprocess.Popen(argv, env=env, cwd=ROOT, stdout=handle, stderr=subprocess.STDOUT)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        try:
+            urllib.request.urlopen(f"http://127.0.0.1:{port}/healthz", timeout=2)
+            return proc
+        except OSError:
+            if proc.poll() is not None:
+                raise RuntimeError(f"the {kind} server stopped: see {log}") from None
+            time.sleep(0.5)
+    proc.terminate()
+    raise RuntimeError(f"the {kind} server did not answer in 60 s: see {log}")
+
+
+def cpu_seconds(pid: int) -> float:
+    """Processor time (user + system) the process has used so far, from /proc."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def stop_server(proc: subprocess.Popen) -> None:
+    proc.terminate()
+    try:
+        proc.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+def create_session(base: str, world: dict[str, str]) -> str:
+    body = json.dumps({"patient": world["patient"], "exercise": world["exercise"]}).encode()
+    request = urllib.request.Request(
+        f"{base}/api/v1/live-sessions/", data=body, method="POST",
+        headers={"Authorization": f"Token {world['token']}", "Content-Type": "application/json"},
+    )  # fmt: skip
+    with urllib.request.urlopen(request, timeout=30) as response:
+        return str(json.load(response)["ws"])
+
+
+# --- the clients ------------------------------------------------------------------------------
+
+
+@dataclass
+class Recording120:
+    header: str
+    frames: list[list[float]]  # each frame's values
+    batch: int = 1
+    messages: list[tuple[int, str]] = field(default_factory=list)  # (first seq, JSON text)
+
+    def __post_init__(self) -> None:
+        for first in range(0, len(self.frames), self.batch):
+            part = self.frames[first : first + self.batch]
+            body = (
+                {"type": "frame", "seq": first, "values": part[0]}
+                if self.batch == 1
+                else {"type": "frames", "seq": first, "frames": part}
             )
-    raise LookupError(TUTOR)
+            self.messages.append((first, json.dumps(body)))
 
 
-def world(model):
-    """A clinic, a therapist with a token, a patient, the exercise and an open live session."""
-    from tests.personas import make_exercise, make_world
-    from webapp.accounts.tokens import issue_token
-    from webapp.live import services
-
-    w = make_world()
-    exercise = make_exercise(w.clinic, "Shoulder abduction", TUTOR)
-    services.exercise_model = lambda _exercise: model
-    _, key = issue_token(w.therapist, "bench")
-    live = services.create_session(patient=w.patient, exercise=exercise, user=w.therapist)
-    return key, live.ws_path
-
-
-async def drive(path: str, key: str, frames: np.ndarray, header: str, fps: float) -> dict:
-    from channels.testing import WebsocketCommunicator
-
-    from webapp.asgi import application
-
-    comm = WebsocketCommunicator(
-        application, path, headers=[(b"authorization", f"Token {key}".encode())]
-    )
-    assert (await comm.connect())[0]
-    await comm.send_json_to({"type": "start", "header": header})
-    await comm.receive_json_from(timeout=60)
-    sent: dict[int, float] = {}
-    trips: list[float] = []
-    server: list[float] = []
-
-    async def receive() -> dict:
-        while True:
-            event = await comm.receive_json_from(timeout=60)
-            if event["event"] == "position":
-                trips.append((time.perf_counter() - sent[event["frame"]]) * 1000.0)
-                server.append(event["latency_ms"])
-            if event["event"] == "summary":
-                return event
-
-    reader = asyncio.create_task(receive())
-    start = time.perf_counter()
-    for seq, values in enumerate(frames):
-        await asyncio.sleep(max(0.0, start + seq / fps - time.perf_counter()))
-        sent[seq] = time.perf_counter()
-        await comm.send_json_to({"type": "frame", "seq": seq, "values": values.tolist()})
-    await comm.send_json_to({"type": "end"})
-    summary = await reader
-    await comm.disconnect()
-    return {"summary": summary, "trips": trips, "server": server}
-
-
-def server_path(model, session: Path, fps: float) -> dict:
-    import django
-    from django.db import connection
-
+def recording_120(seconds: float, fps: float, batch: int) -> Recording120:
     from analysis.bvh import read
+    from analysis.kinematics import resample
     from analysis.online.stream import header_text
 
-    os.environ.setdefault("DJANGO_SETTINGS_MODULE", "webapp.settings")
-    django.setup()
-    from django.conf import settings
+    motion = resample(read(DATA / SESSION), fps)
+    n = min(motion.n_frames, int(seconds * fps))
+    frames = [[round(v, 4) for v in row] for row in motion.frames[:n].tolist()]
+    return Recording120(header_text(motion), frames, batch)
 
-    settings.MEDIA_ROOT = str(Path("/tmp") / f"bench-live-{os.getpid()}")
-    import webapp.recordings.services as queue
 
-    queue.enqueue_analysis = lambda run_id: None  # the offline analysis is not measured here
-    old = connection.creation.create_test_db(verbosity=0, autoclobber=True)
+@dataclass
+class ClientResult:
+    latencies: list[float] = field(default_factory=list)  # from the batch's first frame due
+    sent_latencies: list[float] = field(default_factory=list)  # from the message sent
+    server_ms: list[float] = field(default_factory=list)  # receive -> send, in the server
+    errors: int = 0
+    held: bool = False
+
+
+async def client(url: str, token: str, rec: Recording120, fps: float, begin: float) -> ClientResult:
+    from websockets.asyncio.client import connect
+
+    result = ClientResult()
+    sent: dict[int, float] = {}  # frame -> when its batch's first frame was due
+    sent_at: dict[int, float] = {}  # frame -> when its message was sent
+    headers = {"Authorization": f"Token {token}"}
+    async with connect(url, additional_headers=headers, max_size=None) as ws:
+        await ws.send(json.dumps({"type": "start", "header": rec.header}))
+        while json.loads(await ws.recv())["event"] != "ready":
+            pass
+
+        async def receive() -> None:
+            async for raw in ws:
+                decoded = json.loads(raw)
+                for event in decoded if isinstance(decoded, list) else [decoded]:
+                    if event["event"] == "position":
+                        now = time.perf_counter()
+                        result.latencies.append((now - sent[event["frame"]]) * 1e3)
+                        result.sent_latencies.append((now - sent_at[event["frame"]]) * 1e3)
+                        result.server_ms.append(event["latency_ms"])
+                    elif event["event"] == "error":
+                        result.errors += 1
+
+        reader = asyncio.create_task(receive())
+        phase = random.random() / fps  # clients are not in step with each other
+        for first, message in rec.messages:
+            last = min(first + rec.batch, len(rec.frames)) - 1
+            delay = begin + phase + last / fps - time.perf_counter()
+            if delay > 0:
+                await asyncio.sleep(delay)
+            # the first frame was due (last - first) frames ago: its wait counts
+            now = time.perf_counter()
+            due = min(now, begin + phase + first / fps)
+            for seq in range(first, last + 1):
+                sent[seq], sent_at[seq] = due, now
+            await ws.send(message)
+        await asyncio.sleep(1.0)  # the last answers
+        reader.cancel()
+    async with connect(url, additional_headers=headers) as ws:  # what the server holds
+        ready = json.loads(await asyncio.wait_for(ws.recv(), 30))
+        result.held = ready.get("next_seq") == len(rec.frames)
+    return result
+
+
+async def run_clients(
+    bases: list[str],
+    world: dict[str, str],
+    n: int,
+    rec: Recording120,
+    fps: float,
+    *,
+    warmed: Callable[[], None],
+) -> list[ClientResult]:
+    token = world["token"]
+    # one short session per process first, unmeasured: it loads the model and compiled kernels
+    warm = Recording120(rec.header, rec.frames[: int(fps)], rec.batch)
+    for base in bases:
+        url = base.replace("http://", "ws://") + create_session(base, world)
+        await client(url, token, warm, fps, time.perf_counter())
+    warmed()
+    urls = []
+    for i in range(n):  # sessions spread over the processes, each session's connections in one
+        base = bases[i % len(bases)]
+        urls.append(base.replace("http://", "ws://") + create_session(base, world))
+    begin = time.perf_counter() + 1.0
+    return await asyncio.gather(*(client(url, token, rec, fps, begin) for url in urls))
+
+
+@dataclass
+class Context:
+    env: dict[str, str]
+    world: dict[str, str]
+    rec: Recording120
+    fps: float
+    folder: Path
+    processes: int = 1
+
+
+def label(kind: str, ctx: Context) -> str:
+    name = "runserver" if kind == "runserver" else "Daphne + Redis"
+    if ctx.processes > 1 and kind != "runserver":
+        name += f", {ctx.processes} processes"
+    return f"{name}, {ctx.rec.batch} frame{'s' if ctx.rec.batch > 1 else ''}/message"
+
+
+def measure(kind: str, n: int, ctx: Context) -> Step:
+    env, world, rec, fps = ctx.env, ctx.world, ctx.rec, ctx.fps
+    logs = ctx.folder.parent / "bench-live-logs"  # kept after the run
+    logs.mkdir(exist_ok=True)
+    count = 1 if kind == "runserver" else ctx.processes
+    ports = [free_port() for _ in range(count)]
+    procs = [start_server(kind, env, p, logs / f"{kind}-{n}-{i}.log") for i, p in enumerate(ports)]
+    step = Step(label(kind, ctx), n, sent=n * len(rec.frames))
+    started, cpu = time.perf_counter(), [0.0]
+    bases = [f"http://127.0.0.1:{port}" for port in ports]
+
+    def warmed() -> None:  # processor time from here: imports and model loading are not in it
+        cpu[0] = sum(cpu_seconds(p.pid) for p in procs)
+
     try:
-        key, path = world(model)
-        motion = read(session)
-        return asyncio.run(drive(path, key, motion.frames, header_text(motion), fps))
+        results = asyncio.run(run_clients(bases, world, n, rec, fps, warmed=warmed))
+        step.server_cpu = sum(cpu_seconds(p.pid) for p in procs) - cpu[0]
+    except Exception as error:  # a refused connection or a timeout is a failed step
+        step.notes.append(f"{type(error).__name__}: {error}")
+        step.errors = 1
+        return step
     finally:
-        connection.creation.destroy_test_db(old, verbosity=0)
+        for proc in procs:
+            stop_server(proc)
+    step.seconds = time.perf_counter() - started
+    lat = [v for r in results for v in r.latencies]
+    inside = [v for r in results for v in r.server_ms]
+    step.server_p95 = float(np.percentile(inside, 95)) if inside else float("nan")
+    step.p50, step.p95 = (float(np.percentile(lat, q)) for q in (50, 95)) if lat else (0.0, 0.0)
+    on_send = [v for r in results for v in r.sent_latencies]
+    step.sent_p95 = float(np.percentile(on_send, 95)) if on_send else float("nan")
+    step.answered = len(lat)
+    step.expected = n * len(range(0, len(rec.frames), round(fps / 30)))
+    step.errors = sum(r.errors for r in results)
+    step.held = sum(r.held for r in results)
+    return step
 
 
-def in_process(model, session: Path) -> list[float]:
+# --- report -----------------------------------------------------------------------------------
+
+
+def row(s: Step) -> str:
+    verdict = "yes" if s.passed else "no"
+    lost = "none" if not s.lost else (
+        f"{s.errors} errors, {s.expected - s.answered} unanswered, "
+        f"{s.sessions - s.held} sessions short"
+    )  # fmt: skip
+    cpu = 1e3 * s.server_cpu / max(s.sent, 1)
+    figures = f"{s.p50:.1f} | {s.p95:.1f} | {s.sent_p95:.1f} | {s.server_p95:.1f} | {cpu:.2f}"
+    return f"| {s.server} | {s.sessions} | {s.sessions * 120} | {figures} | {lost} | {verdict} |"
+
+
+def report(steps: list[Step], args: argparse.Namespace, load: str) -> str:
+    lines = [
+        "## Concurrent live sessions",
+        "",
+        f"Measured {dt.date.today().isoformat()} on the project's VM ({machine()}, Python "
+        f"{platform.python_version()}); the machine was shared "
+        f"with other sessions' work while it ran (load average {load} before the run). Clients "
+        "and server on the same machine, over loopback.",
+        f"Command: `.venv/bin/python -m bench.bench_live --servers {args.servers} --counts "
+        f"{args.counts} --seconds {args.seconds:g} --batch {args.batch} --processes "
+        f"{args.processes}`.",
+        "",
+        f"Each client streams {args.seconds:g} s of a 120 Hz recording (UI-PRMD "
+        f"`{SESSION}` resampled) at 120 frames/s to its own live session, one frame or a batch "
+        "of frames per message; latency is frame due → position event received for the "
+        "frames the aligner answers (every fourth: the exercise model runs at 30 frames/s), "
+        "counted from when the first frame of the frame's message was due, so a batch's wait "
+        "for its last frame is in it (2 frame times, 17 ms, for 3 frames at 120 frames/s). "
+        "From the message sent: the same without that wait. In the consumer: message received "
+        "→ position event sent, measured by the server (queueing before the consumer is not "
+        "in it). Server processor time: user + system time of the server processes per frame "
+        "sent, from after a one-second warm-up session per process (imports and model "
+        "loading are not in it; session set-up is).",
+        "",
+        "| server | sessions | frames/s in | p50 latency (ms) | p95 latency (ms) | p95 from the "
+        "message sent (ms) | p95 in the consumer (ms) | server processor time per frame (ms) | "
+        "frames lost | p95 ≤ 50 ms, none lost |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+        *(row(s) for s in steps),
+        "",
+    ]
+    for name in dict.fromkeys(s.server for s in steps):
+        ok = [s.sessions for s in steps if s.server == name and s.passed]
+        lines.append(f"- {name}: largest N that passed: {max(ok) if ok else 'none'}.")
+    notes = [f"- {s.server} N={s.sessions}: {n}" for s in steps for n in s.notes]
+    return "\n".join(lines + notes)
+
+
+def aligner_times() -> None:
     from analysis.bvh import read
     from analysis.online.live import LiveAligner
+    from bench.eval_live import tutor_model
 
-    motion = read(session)
-    aligner = LiveAligner(model, motion.skeleton, motion.fps)
-    for values in motion.frames:
-        aligner.push(values)
-    return aligner.latencies_ms
+    model = tutor_model(DATA, "m07")
+    motion = read(DATA / SESSION)
+    for _ in range(2):  # the first pass loads the compiled kernels
+        aligner = LiveAligner(model, motion.skeleton, motion.fps)
+        for values in motion.frames:
+            aligner.push(values)
+    p50, p95 = np.percentile(aligner.latencies_ms, [50, 95])
+    print(f"in-process aligner per frame: p50 {p50:.3f} ms, p95 {p95:.3f} ms")
 
 
-def p(values: list[float], q: float) -> float:
-    return round(float(np.percentile(values, q)), 2)
-
-
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--servers", default="runserver,redis")
+    parser.add_argument("--counts", default="10,20,35,50,70,100")
+    parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--fps", type=float, default=120.0)
-    parser.add_argument("--session", default="sessions/m07_s03_incorrect.bvh.gz")
-    args = parser.parse_args()
-    session = DATA / args.session
-    model = build()
-    in_process(model, session)  # warm-up: numba kernels compile once
-    local = in_process(model, session)
-    result = server_path(model, session, args.fps)
-    s = result["summary"]
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
-          f"Python {platform.python_version()}")  # fmt: skip
-    print(f"session {args.session}: {s['frames']} frames sent at {args.fps:g} frames/s, "
-          f"{s['repetitions']} repetitions, {s.get('dropped', 0)} dropped")  # fmt: skip
-    print(
-        f"server, frame received -> position sent: p50 {p(result['server'], 50)} ms, "
-        f"p95 {p(result['server'], 95)} ms (summary latency_ms_p95 {s['latency_ms_p95']})"
-    )
-    print(f"client round trip (send -> position received): p50 {p(result['trips'], 50)} ms, "
-          f"p95 {p(result['trips'], 95)} ms")  # fmt: skip
-    print(f"in-process aligner per frame: p50 {p(local, 50)} ms, p95 {p(local, 95)} ms")
+    parser.add_argument("--redis-db", type=int, default=14)
+    parser.add_argument("--batch", default="1,3", help="frames per message, e.g. 1,3")
+    parser.add_argument("--processes", default="1,2", help="Daphne processes (redis), e.g. 1,2")
+    parser.add_argument("--markdown", type=Path)
+    parser.add_argument("--aligner", action="store_true")
+    args = parser.parse_args(argv)
+    if args.aligner:
+        aligner_times()
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    steps: list[Step] = []
+    for kind in args.servers.split(","):
+        redis_url = f"redis://127.0.0.1:6379/{args.redis_db}" if kind == "redis" else None
+        with tempfile.TemporaryDirectory(prefix=f"bench-live-{kind}-") as tmp:
+            folder = Path(tmp)
+            env = server_env(folder, redis_url)
+            world = setup_world(env)
+            for batch, processes in configurations(kind, args):
+                rec = recording_120(args.seconds, args.fps, batch)
+                ctx = Context(env, world, rec, args.fps, folder, processes)
+                steps += grow(kind, ctx, [int(v) for v in args.counts.split(",")])
+    text = report(steps, args, load)
+    print(text)
+    if args.markdown:
+        args.markdown.write_text(text + "\n", encoding="utf-8")
+
+
+def configurations(kind: str, args: argparse.Namespace) -> list[tuple[int, int]]:
+    """(frames per message, server processes) to measure for the server kind."""
+    batches = [int(v) for v in str(args.batch).split(",")]
+    processes = [1] if kind == "runserver" else [int(v) for v in str(args.processes).split(",")]
+    return [(b, p) for b in batches for p in processes]
+
+
+def grow(kind: str, ctx: Context, counts: list[int]) -> list[Step]:
+    """Steps of growing N until one fails (twice: the machine is shared)."""
+    steps: list[Step] = []
+    for n in counts:
+        step = measure(kind, n, ctx)
+        if not step.passed:  # the machine is shared: a failed step is tried once more
+            steps.append(step)
+            print(row(step), "(first try)", flush=True)
+            step = measure(kind, n, ctx)
+            step.notes.append("second try (the first is the row above)")
+        steps.append(step)
+        per_frame = 1e3 * step.server_cpu / max(step.sent, 1)
+        print(
+            row(step),
+            f"server p95 {step.server_p95:.1f} ms, server CPU "
+            f"{step.server_cpu:.1f} s = {per_frame:.3f} ms/frame",
+            *step.notes,
+            flush=True,
+        )
+        if not step.passed:
+            break
+    return steps
 
 
 if __name__ == "__main__":

@@ -6,7 +6,10 @@ sessions of the other subjects s02–s07 (leave one subject out). Reports ROC-AU
 score and of the per-repetition scores (each repetition labelled as its session) for correct vs
 incorrect sessions, exact repetition counts, the share of true repetition starts found within
 ±5 frames, and the naive baseline (plain DTW distance of each repetition, cut at the true
-boundaries, to the tutor's repetitions).
+boundaries, to the tutor's repetitions). Then the one calibrated scale (issue 17): the mean
+recording score of correct and of incorrect sessions, the share of sessions whose pass/fail
+(recording score against the result's pass threshold) agrees with the label, and the corrections
+(the feedback's advice): sessions with at least one (incorrect) or at most one (correct).
 
     python -m bench.eval_assessment [--data data/ui-prmd] [--exercises m01,m02] [--no-trained]
 """
@@ -62,6 +65,9 @@ class ExerciseResult:
     starts_total: int = 0
     seconds: float = 0.0
     fallbacks: int = 0
+    agree: int = 0  # sessions whose pass/fail (score >= pass_threshold) matches the label
+    thresholds: set[float] = field(default_factory=set)
+    corrections: list[tuple[int, bool]] = field(default_factory=list)  # (count, is correct)
 
 
 def load_sessions(data: Path, exercise: str) -> tuple[Session, list[Session]]:
@@ -117,6 +123,10 @@ def evaluate_session(result: ExerciseResult, session: Session, model, tutor: Ses
         result.starts_total += 1
         result.starts_found += bool(found) and min(abs(f - truth) for f in found) <= 5
     result.recording_scores.append((summary["score"], session.correct))
+    result.agree += (summary["score"] >= summary["pass_threshold"]) == session.correct
+    result.thresholds.add(summary["pass_threshold"])
+    advice = summary.get("advice") or {}
+    result.corrections.append((len(advice.get("corrections", ())), session.correct))
     result.rep_scores += [(r["score"], session.correct) for r in summary["repetitions"]]
 
 
@@ -170,12 +180,37 @@ def table(data: Path, exercises: list[str], trained: bool) -> list[ExerciseResul
     fallbacks = sum(r.fallbacks for r in results)
     print(f"\nFallback segmentation (no key-pose cycle): {fallbacks} of "
           f"{sum(r.sessions for r in results)} sessions.")  # fmt: skip
+    calibration_figures(results)
     now = {"AUC recording": rec, "AUC repetition": rep, "exact count": exact, "starts ±5": starts}
     before = BEFORE[title]
     print("\n| figure | before (b6b61f4) | now |\n|---|---|---|")
     for name, value in now.items():
         print(f"| {name} | {before[name]:.3f} | {value:.3f} |")
     return results
+
+
+def calibration_figures(results: list[ExerciseResult]) -> None:
+    """The one scale's figures over all exercises (issue 17's targets)."""
+    pairs = [p for r in results for p in r.recording_scores]
+    good = np.mean([s for s, c in pairs if c])
+    bad = np.mean([s for s, c in pairs if not c])
+    sessions = sum(r.sessions for r in results)
+    agree = sum(r.agree for r in results) / sessions
+    thresholds = sorted(set().union(*(r.thresholds for r in results)))
+    counts = [p for r in results for p in r.corrections]
+    flagged = np.mean([n >= 1 for n, c in counts if not c])
+    quiet = np.mean([n <= 1 for n, c in counts if c])
+    most = max(n for n, _ in counts)
+    print(f"\nOne scale: pass threshold(s) {thresholds}; mean recording score correct {good:.1f}, "
+          f"incorrect {bad:.1f} (gap {good - bad:.1f} points); pass/fail agrees with the label "
+          f"on {agree:.1%} of {sessions} sessions.")  # fmt: skip
+    for r, name in zip(results, EXERCISES, strict=False):
+        print(f"  {name}: agree {r.agree}/{r.sessions}")
+    print(f"Corrections: incorrect sessions with at least one {flagged:.1%}; correct sessions "
+          f"with at most one {quiet:.1%}; at most {most} per recording.")  # fmt: skip
+
+
+EXERCISES: list[str] = []
 
 
 def main() -> None:
@@ -186,6 +221,7 @@ def main() -> None:
     parser.add_argument("--no-cold", action="store_true")
     args = parser.parse_args()
     exercises = args.exercises.split(",")
+    EXERCISES[:] = exercises
     print(f"UI-PRMD assessment evaluation, {time.strftime('%Y-%m-%d')}")
     if not args.no_cold:
         table(args.data, exercises, trained=False)

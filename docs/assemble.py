@@ -20,7 +20,15 @@ DOCUMENTS: dict[str, tuple[str, str, list[str]]] = {
         f"machine is {MACHINE}, shared with other jobs while these were taken (timings swing by up "
         "to 2×; ratios against peers are measured in the same run). Where a target is not reached, "
         "the section says so and by how much.",
-        ["bench_bvh", "bench_dtw", "bench_pipeline", "e2e", "bench_scale"],
+        [
+            "bench_bvh",
+            "bench_dtw",
+            "bench_pipeline",
+            "e2e",
+            "bench_scale",
+            "bench_upload",
+            "bench_live",
+        ],
     ),
     "EVALUATION.md": (
         "Evaluation",
@@ -34,8 +42,11 @@ DOCUMENTS: dict[str, tuple[str, str, list[str]]] = {
             "eval_alignment",
             "eval_identification",
             "eval_assessment",
+            "eval_rigs_feedback",
             "eval_pipeline",
+            "clinical",
             "assessment_design",
+            "eval_live",
         ],
     ),
     "RELIABILITY.md": (

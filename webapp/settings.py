@@ -223,7 +223,9 @@ CELERY_BROKER_URL = REDIS_URL or "memory://"
 # Live sessions: WebSocket groups on Redis when configured, in memory (one process) otherwise.
 _REDIS_LAYER = {
     "BACKEND": "channels_redis.core.RedisChannelLayer",
-    "CONFIG": {"hosts": [REDIS_URL]},
+    # redis-py 8 reads with a 5 s timeout by default, the same as channels_redis's blocking pop:
+    # a connection that heard nothing for 5 s would then fail. Reads wait longer than the pop.
+    "CONFIG": {"hosts": [{"address": REDIS_URL, "socket_timeout": 30}]},
 }
 CHANNEL_LAYERS = {
     "default": _REDIS_LAYER if REDIS_URL else {"BACKEND": "channels.layers.InMemoryChannelLayer"}
@@ -268,6 +270,25 @@ CELERY_BROKER_TRANSPORT_OPTIONS = {
     "visibility_timeout": int(os.environ.get("BROKER_VISIBILITY_TIMEOUT", ANALYSIS_TIME_LIMIT * 2))
 }
 CELERY_BROKER_CONNECTION_RETRY_ON_STARTUP = True
+# `make run` (workers/local.py) sets LOCAL_BROKER_DIR: a real Celery worker process runs beside
+# the server and messages are files in that folder (kombu's filesystem transport), so an upload
+# returns at once with nothing to install. REDIS_URL, when set, wins.
+LOCAL_BROKER_DIR = os.environ.get("LOCAL_BROKER_DIR", "")
+if LOCAL_BROKER_DIR and not REDIS_URL:
+    CELERY_BROKER_URL = "filesystem://"
+    CELERY_TASK_ALWAYS_EAGER = False
+    CELERY_BROKER_TRANSPORT_OPTIONS = {
+        "data_folder_in": str(Path(LOCAL_BROKER_DIR) / "queue"),
+        "data_folder_out": str(Path(LOCAL_BROKER_DIR) / "queue"),
+        "control_folder": str(Path(LOCAL_BROKER_DIR) / "control"),
+        "polling_interval": 0.2,  # seconds between looks at the folder when it is empty
+    }
+    if DATABASES["default"]["ENGINE"].endswith("sqlite3"):
+        # Two processes write the SQLite file (server and worker): readers never wait for the
+        # worker's progress writes (WAL), and a writer waits for the other instead of failing.
+        DATABASES["default"].setdefault("OPTIONS", {}).update(
+            timeout=30, init_command="PRAGMA journal_mode=WAL;", transaction_mode="IMMEDIATE"
+        )
 CELERY_BEAT_SCHEDULE = {
     "reap-stuck-runs": {"task": "workers.tasks.reap_stuck_runs", "schedule": 60.0},
     "requeue-lost-runs": {"task": "workers.tasks.requeue_lost_runs", "schedule": 60.0},

@@ -3,8 +3,12 @@
 `rebuild_models_with_corrections`: an exercise with corrections not yet used by a model gets a new
 model version fitted on its tutor plus the corrected recordings (landmarks as corrected, label from
 the corrected levels); the corrections then point at the version that used them.
-`refit_pass_thresholds`: paper 001's pass/fail score threshold (Bayes boundary between the score
-distributions of passed and failed repetitions, eqs 13-15) refitted from therapist verdicts.
+`refit_pass_thresholds`: the pass threshold is the same stated number on every exercise
+(`PASS_SCORE`, 70: issue 17's one scale), so therapist verdicts never move it. They train the
+model instead: a run with verdicts is a labelled recording of the next model version (which maps
+its own labelled boundary onto 70), and a verdict newer than the exercise's newest model queues a
+rebuild. The refit reports where the verdicts would put the boundary on today's scores (paper
+001's Bayes boundary, eqs 13-15) and how often a score of 70 or more agrees with them.
 """
 
 from __future__ import annotations
@@ -14,9 +18,10 @@ from collections.abc import Callable
 from typing import Any
 
 from django.db import transaction
-from django.db.models import Q
+from django.db.models import Max, Q
 from django.utils import timezone
 
+from analysis.assessment.scoring import PASS_SCORE
 from analysis.bvh import read
 from analysis.online import BayesThreshold
 from analysis.pipeline import TrainingRecording
@@ -35,7 +40,9 @@ MIN_PER_CLASS = 2
 def corrected_runs(exercise: Exercise):
     return (
         AnalysisRun.objects.filter(
-            Q(landmark_fixes__isnull=False) | Q(assessment_fixes__isnull=False),
+            Q(landmark_fixes__isnull=False)
+            | Q(assessment_fixes__isnull=False)
+            | Q(repetition_labels__isnull=False),
             recording__exercise=exercise,
         )
         .distinct()
@@ -44,10 +51,14 @@ def corrected_runs(exercise: Exercise):
 
 
 def run_label(run: AnalysisRun) -> str:
-    """The worst corrected level, else the median of the analysis' worst level per key pose."""
+    """The worst corrected level; else the therapist's verdicts ("correct" when at least half of
+    the judged repetitions passed); else the median of the analysis' worst level per key pose."""
     corrected = list(run.assessment_fixes.values_list("level", flat=True))
     if corrected:
         return str(max(1, min(4, max(corrected))))
+    verdicts = list(run.repetition_labels.values_list("passed", flat=True))
+    if verdicts:
+        return "correct" if 2 * sum(verdicts) >= len(verdicts) else "incorrect"
     assessment = run.result.assessment if run.result else ()
     worst = [max(a.levels.values()) for a in assessment if a.levels]
     return str(max(1, min(4, round(statistics.median(worst))))) if worst else "correct"
@@ -74,9 +85,26 @@ def pending_exercises() -> list[Exercise]:
     for model in (LandmarkCorrection, AssessmentCorrection):
         unused = model.objects.filter(used_in_model__isnull=True)
         ids |= set(unused.values_list("run__recording__exercise_id", flat=True))
+    ids |= exercises_with_new_verdicts()
     building = ExerciseModel.objects.filter(status__in=[ModelStatus.QUEUED, ModelStatus.RUNNING])
     ids -= set(building.values_list("exercise_id", flat=True))
     return list(Exercise.objects.filter(pk__in=ids - {None}, archived_at__isnull=True))
+
+
+def exercises_with_new_verdicts() -> set[Any]:
+    """Exercises with a pass/fail verdict newer than their newest model version."""
+    newest_label = dict(
+        RepetitionLabel.objects.values_list("run__recording__exercise_id")
+        .annotate(at=Max("created_at"))
+        .values_list("run__recording__exercise_id", "at")
+    )
+    newest_model = dict(
+        ExerciseModel.objects.filter(exercise_id__in=list(newest_label))
+        .values_list("exercise_id")
+        .annotate(at=Max("created_at"))
+        .values_list("exercise_id", "at")
+    )
+    return {e for e, at in newest_label.items() if e not in newest_model or at > newest_model[e]}
 
 
 def mark_used(exercise: Exercise, model: ExerciseModel) -> None:
@@ -116,11 +144,13 @@ def threshold_data(exercise: Exercise) -> tuple[list[float], list[bool]]:
 
 
 def refit_threshold(exercise: Exercise) -> dict[str, Any] | None:
+    """Report what the verdicts say about the one threshold; it stays `PASS_SCORE`."""
     scores, failed = threshold_data(exercise)
     n_failed = sum(failed)
     if min(n_failed, len(failed) - n_failed) < MIN_PER_CLASS:
         return None
     fitted = BayesThreshold().fit(scores, failed)
+    agree = sum((s >= PASS_SCORE) != f for s, f in zip(scores, failed, strict=True))
     report = {
         "n_passed": len(failed) - n_failed,
         "n_failed": n_failed,
@@ -128,15 +158,18 @@ def refit_threshold(exercise: Exercise) -> dict[str, Any] | None:
         "mean_failed": float(fitted.means_[1]),
         "std_passed": float(fitted.stds_[0]),
         "std_failed": float(fitted.stds_[1]),
+        "verdict_boundary": float(fitted.threshold_),
+        "agreement": agree / len(failed),
         "fitted_at": timezone.now().isoformat(),
     }
     Exercise.objects.filter(pk=exercise.pk).update(
-        pass_threshold=float(fitted.threshold_), threshold_report=report
+        pass_threshold=PASS_SCORE, threshold_report=report
     )
     return report
 
 
 def refit_pass_thresholds() -> int:
-    """Refit the threshold of every exercise with labelled repetitions; returns how many."""
+    """Report the verdicts of every exercise with labelled repetitions (the threshold stays
+    `PASS_SCORE`); returns how many."""
     labelled = Exercise.objects.filter(recordings__runs__repetition_labels__isnull=False).distinct()
     return sum(refit_threshold(exercise) is not None for exercise in labelled)

@@ -14,12 +14,15 @@ bone's roll, so every angle here depends only on long axes and the pelvis and th
   components of its attitude (rotation) vector from hanging down (Woltring 1994): elevation
   times the plane's share, so each is the goniometer's angle for a movement in its own plane
   (flexion in the sagittal, abduction in the frontal plane) with no gimbal lock at 90°, where
-  Cardan angles of the shoulder fail.
+  Cardan angles of the shoulder fail. An arm straight forward is flexion 90°, abduction 0°. The
+  one singular direction is straight up (the plane is undefined there): an arm tipping over the
+  top medially reads negative abduction, which Kinect glitches overhead do on UI-PRMD squats.
 - ``knee_flexion`` / ``elbow_flexion``: the angle between the two segments' long axes (0 when
   straight; hinge joints, hyperextension is not told apart).
 - ``ankle_dorsiflexion``: the change of the angle between shank and foot from the rest pose's,
   the one zero taken from the rig: without a heel joint the sole's direction is unknown, and rigs
-  stand flat-footed in their rest pose whatever they do with the arms.
+  stand flat-footed in their rest pose whatever they do with the arms (so it is left out where
+  the rest shank does not hang within 45° of the vertical).
 """
 
 from __future__ import annotations
@@ -29,7 +32,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from analysis.bvh import Motion
-from analysis.clinical.body import SIDE_SIGN, SIDES, UP, FloatArray, Geometry, geometry, unit
+from analysis.clinical.body import (
+    MAX_REST_TILT,
+    SIDE_SIGN,
+    SIDES,
+    UP,
+    FloatArray,
+    Geometry,
+    geometry,
+    unit,
+)
 
 if TYPE_CHECKING:
     from analysis.pipeline.results import AngleRange
@@ -95,7 +107,7 @@ def _limb_angles(geo: Geometry, side: str) -> dict[str, FloatArray]:
         if f"{a}_{side}" in axes and f"{b}_{side}" in axes:
             out[f"{name}_{side}"] = _between(axes[f"{a}_{side}"], axes[f"{b}_{side}"])
     shank, foot = f"shank_{side}", f"foot_{side}"
-    if shank in axes and foot in axes:
+    if shank in axes and foot in axes and -geo.rest_axes[shank] @ UP > MAX_REST_TILT:
         neutral = _between(-geo.rest_axes[shank], geo.rest_axes[foot])
         out[f"ankle_dorsiflexion_{side}"] = neutral - _between(-axes[shank], axes[foot])
     return out

@@ -1,23 +1,27 @@
 """The body's joints in any mapped rig, and the segment geometry the clinical angles read.
 
-Joints are found by name through the rows of `analysis.bvh.skeleton_map.SYNONYMS` (UI-PRMD /
-Kinect, CMU, Mixamo, Bandai-Namco names), so a rig's own naming never matters. From them:
+Joints are found by `analysis.bvh.rigs.identify` (names, chain and rest pose: UI-PRMD / Kinect,
+CMU in both its conversions, Mixamo, Xsens, Rokoko …), so a rig's own naming never matters.
+Joints at the same rest position as their parent (CMU's ``LowerBack``, ``Neck`` and collars) are
+connectors, not segments. From the joints:
 
-- the *pelvis* is the bone from the hips' common parent (the pelvis joint) to its first child on
-  the way up the spine; its lateral reference is the line from the left to the right hip joint;
-- the *thorax* is the longest bone between that child and the base of the neck (so the short
-  connector bones some rigs put at the neck are not taken for it); its lateral reference is the
-  line between the collar joints (the shoulder joints when a rig has no collars);
+- the *pelvis* turns with the hips' common parent (the pelvis joint); its lateral reference is
+  the line from the left to the right hip joint;
+- the *thorax* is the longest bone between the pelvis and the base of the neck, turning with the
+  joint at its lower end; its lateral reference turns with the collars' common parent (the
+  shoulders' when the collars are one point);
 - the limb segments are thigh (hip→knee), shank (knee→ankle), foot (ankle→toe), upper arm
   (shoulder→elbow) and forearm (elbow→wrist).
 
-Every segment frame has the ISB axes (Wu et al. 2002, 2005): X anterior, Y superior (the bone's
-long axis, primary) and Z to the right, on both sides. Two independent computations give the
-same geometry: ``orientation`` applies each segment's global rotation (forward kinematics of the
-BVH channels) to its axes in the file's rest pose; ``positions`` builds the frames from the world
-positions of the joints alone (the cross-check, and what a positions-only sensor would give).
-Anatomical zeros never come from the rest pose (rigs stand in T-, A- or anatomical poses), only
-the segments' shapes do.
+Every segment frame has the ISB axes (Wu et al. 2002, 2005): X anterior, Y superior (the long
+axis, primary) and Z to the right, on both sides. The trunk's zero is the rest pose's body frame
+(upright, facing away from the hip line): rigs stand upright in their rest pose, whatever they do
+with the arms, and a rig whose rest spine leans more than 45° (Rokoko's every-bone-along-x
+exports) gives no trunk, hip or shoulder angles. Limb zeros never come from the rest pose (T-, A-
+or anatomical arms), only the segments' directions do. Two computations give the same geometry:
+``orientation`` turns the rest-pose axes by the segments' global rotations (forward kinematics of
+the BVH channels); ``positions`` builds the frames from the joints' world positions alone (the
+cross-check, and what a positions-only sensor would give).
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh import Motion, Skeleton
+from analysis.bvh.rigs import identify
 from analysis.bvh.skeleton_map import SYNONYMS, normalise_name
 from analysis.kinematics import positions
 from analysis.kinematics import quaternions as quat
@@ -67,11 +72,31 @@ def _role_table() -> dict[str, str]:
 _ROLE_BY_NAME = _role_table()
 
 
+# Body part of `analysis.bvh.rigs.identify` -> the role it plays here.
+_ROLE_OF_PART = {
+    "pelvis": "pelvis", "chest": "chest", "neck": "neck", "collar": "collar",
+    "upper_arm": "shoulder", "forearm": "elbow", "hand": "wrist", "upper_leg": "hip",
+    "lower_leg": "knee", "foot": "ankle", "toes": "toe",
+}  # fmt: skip
+EPS = 1e-6  # file units: closer rest points are one point (zero-length connector bones)
+# A rest pose whose spine (or shank) leans more than this from the vertical is not a standing
+# figure (Rokoko exports lay every bone along its local x): its rest pose gives no zero.
+MAX_REST_TILT = np.cos(np.radians(45.0))
+
+
 def find_joints(skeleton: Skeleton) -> dict[str, int]:
-    """Joint index of every role the rig has (``"knee_left"`` …); the first joint in file order
-    wins, so ``Spine`` is taken before ``Spine1``."""
+    """Joint index of every role the rig has (``"knee_left"`` …), found by names, chain and rest
+    pose with `analysis.bvh.rigs.identify` (Kinect, CMU, Mixamo, Xsens, Rokoko … names); the
+    names of `SYNONYMS` rows stand in where it finds nothing. End Sites are not joints here."""
     found: dict[str, int] = {}
-    for index, name in enumerate(skeleton.names):
+    for part, point in identify(skeleton).items():
+        side, _, base = part.partition("_")
+        role = _ROLE_OF_PART.get(base if side in SIDES else part)
+        if role is not None and point < len(skeleton.names):
+            found[f"{role}_{side}" if side in SIDES else role] = point
+    if found:
+        return found
+    for index, name in enumerate(skeleton.names):  # a rig identify cannot read: names only
         role = _ROLE_BY_NAME.get(normalise_name(name))
         if role is not None:
             found.setdefault(role, index)
@@ -88,10 +113,16 @@ def _ancestors(skeleton: Skeleton, joint: int) -> list[int]:
 
 @dataclass(frozen=True)
 class Frame:
-    """A segment frame: long axis from ``bone[0]`` to ``bone[1]``, moved by the global rotation
-    of ``bone[0]``; lateral reference from ``lateral[0]`` (left) to ``lateral[1]`` (right), moved
-    by the rotation of their nearest common ancestor ``lateral_joint``."""
+    """A trunk segment's frame.
 
+    From orientations: the global rotation of ``joint`` turns the rest pose's vertical (the long
+    axis; rigs stand upright in their rest pose, whatever they do with the arms) and the rotation
+    of ``lateral_joint``, the nearest common ancestor of the lateral pair, turns the rest line from
+    ``lateral[0]`` (left) to ``lateral[1]`` (right). From positions: the lines ``bone[0]`` →
+    ``bone[1]`` and left → right, turned back by the rest pose's own tilt of that bone, so both
+    computations read 0 in the rest pose even where a rig's spine bones lean."""
+
+    joint: int
     bone: tuple[int, int]
     lateral: tuple[int, int]
     lateral_joint: int
@@ -113,19 +144,39 @@ def _common_ancestor(skeleton: Skeleton, pair: tuple[int, int]) -> int | None:
 
 
 def _trunk_chain(skeleton: Skeleton, joints: dict[str, int]) -> list[int] | None:
-    """Joints from the pelvis joint up to the base of the neck, pelvis first."""
+    """Joints from the pelvis joint up to the base of the neck, pelvis first, without the
+    zero-length connectors some rigs put between them (CMU's ``LowerBack``, ``Neck``)."""
     hips = _lateral_pair(joints, "hip")
     pelvis = None if hips is None else _common_ancestor(skeleton, hips)
     top = joints.get("neck", joints.get("chest"))
     if pelvis is None or top is None:
         return None
     chain = _ancestors(skeleton, top)
-    return chain[: chain.index(pelvis) + 1][::-1] if pelvis in chain[1:] else None
+    if pelvis not in chain[1:]:
+        return None
+    rest = rest_positions(skeleton)
+    kept = [pelvis]
+    for joint in chain[: chain.index(pelvis)][::-1]:
+        if np.linalg.norm(rest[joint] - rest[kept[-1]]) > EPS:
+            kept.append(joint)
+    if len(kept) < 2 or unit(rest[kept[-1]] - rest[kept[0]]) @ UP < MAX_REST_TILT:
+        return None
+    return kept
 
 
 def _lateral_pair(joints: dict[str, int], part: str) -> tuple[int, int] | None:
     pair = joints.get(f"{part}_left"), joints.get(f"{part}_right")
     return None if pair[0] is None or pair[1] is None else (pair[0], pair[1])
+
+
+def _thorax_lateral(skeleton: Skeleton, joints: dict[str, int]) -> tuple[int, int] | None:
+    """The collar joints, or the shoulder joints where the collars are one point (CMU)."""
+    rest = rest_positions(skeleton)
+    for part in ("collar", "shoulder"):
+        pair = _lateral_pair(joints, part)
+        if pair is not None and np.linalg.norm(rest[pair[1]] - rest[pair[0]]) > EPS:
+            return pair
+    return None
 
 
 def _frames(skeleton: Skeleton, joints: dict[str, int]) -> tuple[Frame | None, Frame | None]:
@@ -134,14 +185,18 @@ def _frames(skeleton: Skeleton, joints: dict[str, int]) -> tuple[Frame | None, F
     if chain is None or hips is None:
         return None, None
     bones = list(itertools.pairwise(chain))
-    pelvis = Frame(bones[0], hips, chain[0])
+    pelvis = Frame(chain[0], bones[0], hips, chain[0])
     upper = bones[1:] or bones
-    thorax_bone = max(upper, key=lambda b: float(np.linalg.norm(skeleton.offsets[b[1]])))
-    lateral = _lateral_pair(joints, "collar") or _lateral_pair(joints, "shoulder")
+    rest = rest_positions(skeleton)
+    thorax_bone = max(upper, key=lambda b: float(np.linalg.norm(rest[b[1]] - rest[b[0]])))
+    lateral = _thorax_lateral(skeleton, joints)
     moved_by = None if lateral is None else _common_ancestor(skeleton, lateral)
     if lateral is None or moved_by is None:
         return pelvis, None
-    return pelvis, Frame(thorax_bone, lateral, moved_by)
+    # The bone turns with the joint just above its lower end (the lower end itself, unless
+    # zero-length connectors sit in between).
+    joint = int(skeleton.parents[thorax_bone[1]])
+    return pelvis, Frame(joint, thorax_bone, lateral, moved_by)
 
 
 def find_body(skeleton: Skeleton) -> Body:
@@ -191,19 +246,25 @@ def geometry(motion: Motion, method: str = "orientation") -> Geometry:
     """Segment geometry of every frame, from segment orientations or from positions only."""
     if method not in ("orientation", "positions"):
         raise ValueError(f"method must be 'orientation' or 'positions', not {method!r}")
-    body = find_body(motion.skeleton)
-    rest = rest_positions(motion.skeleton)
+    skeleton = motion.skeleton
+    body = find_body(skeleton)
+    rest = rest_positions(skeleton)
     rest_axes = {k: unit(rest[b] - rest[a]) for k, (a, b) in body.limbs.items()}
+    neutral = neutral_frame(rest, body)
     if method == "positions":
         pos = positions(motion)
-        frames = [None if f is None else _frame_from_points(pos, f) for f in body_frames(body)]
+        frames = [
+            None if f is None or neutral is None else _frame_from_points(pos, rest, f, neutral)
+            for f in body_frames(body)
+        ]
         axes = {k: unit(pos[:, b] - pos[:, a]) for k, (a, b) in body.limbs.items()}
     else:
         rot = quat.to_matrix(global_rotations(motion))
         frames = [
-            None if f is None else _frame_from_rotation(rot, rest, f) for f in body_frames(body)
+            None if f is None or neutral is None else _frame_from_rotation(rot, f, neutral)
+            for f in body_frames(body)
         ]
-        axes = {k: unit(rot[:, a] @ (rest[b] - rest[a])) for k, (a, b) in body.limbs.items()}
+        axes = {k: unit(_chain_vector(skeleton, rot, a, b)) for k, (a, b) in body.limbs.items()}
     return Geometry(frames[0], frames[1], axes, rest_axes)
 
 
@@ -211,12 +272,39 @@ def body_frames(body: Body) -> tuple[Frame | None, Frame | None]:
     return body.pelvis, body.thorax
 
 
-def _frame_from_points(pos: FloatArray, frame: Frame) -> FloatArray:
-    (a, b), (left, right) = frame.bone, frame.lateral
-    return make_frame(pos[:, b] - pos[:, a], pos[:, right] - pos[:, left])
+def _chain_vector(skeleton: Skeleton, rot: FloatArray, a: int, b: int) -> FloatArray:
+    """World vector from joint ``a`` to its descendant ``b`` from the global rotations: each
+    rest offset on the way turned by its parent's rotation (twist and connector joints between
+    the two move the segment too)."""
+    total = np.zeros((rot.shape[0], 3))
+    joint = b
+    while joint != a and joint >= 0:
+        parent = int(skeleton.parents[joint])
+        total += rot[:, parent] @ skeleton.offsets[joint] if parent >= 0 else 0.0
+        joint = parent
+    return total
 
 
-def _frame_from_rotation(rot: FloatArray, rest: FloatArray, frame: Frame) -> FloatArray:
+def neutral_frame(rest: FloatArray, body: Body) -> FloatArray | None:
+    """The body's frame in the rest pose, which both trunk segments have at 0: upright, facing
+    away from the line between the hip joints (so a rig whose shoulder joints sit a little
+    askew, as CMU's, still faces where its hips face)."""
+    if body.pelvis is None:
+        return None
+    left, right = body.pelvis.lateral
+    return make_frame(UP, rest[right] - rest[left])
+
+
+def _frame_from_points(
+    pos: FloatArray, rest: FloatArray, frame: Frame, neutral: FloatArray
+) -> FloatArray:
     (a, b), (left, right) = frame.bone, frame.lateral
-    long_axis = rot[:, a] @ (rest[b] - rest[a])
-    return make_frame(long_axis, rot[:, frame.lateral_joint] @ (rest[right] - rest[left]))
+    now = make_frame(pos[:, b] - pos[:, a], pos[:, right] - pos[:, left])
+    at_rest = make_frame(rest[b] - rest[a], rest[right] - rest[left])
+    return now @ at_rest.T @ neutral
+
+
+def _frame_from_rotation(rot: FloatArray, frame: Frame, neutral: FloatArray) -> FloatArray:
+    return make_frame(
+        rot[:, frame.joint] @ neutral[:, 1], rot[:, frame.lateral_joint] @ neutral[:, 2]
+    )

@@ -144,3 +144,47 @@ def angle_groups(
         if rows:
             groups.append({"region": title, "involved": title in moved, "rows": rows})
     return sorted(groups, key=lambda g: not g["involved"])
+
+
+# Corrections (analysis.feedback.advice): the body part each clinical angle moves, in plain
+# words, and how a patient is told to change it: (kind of finding → direction word, instruction).
+# "less" = a smaller range than the tutor's, "more" = a larger one, "extra" = moving a part the
+# tutor keeps still. The instruction holds {part}; the past tense says what the part did.
+ANGLE_PARTS = {
+    "knee_flexion": "knee", "hip_flexion": "hip", "hip_abduction": "leg",
+    "ankle_dorsiflexion": "ankle", "shoulder_flexion": "arm", "shoulder_abduction": "arm",
+    "elbow_flexion": "elbow", "trunk_flexion": "trunk", "trunk_lateral_flexion": "trunk",
+}  # fmt: skip
+ANGLE_PAST = {
+    "knee_flexion": "bent", "hip_flexion": "bent", "hip_abduction": "moved out",
+    "ankle_dorsiflexion": "bent", "shoulder_flexion": "rose", "shoulder_abduction": "rose",
+    "elbow_flexion": "bent", "trunk_flexion": "leaned", "trunk_lateral_flexion": "bent sideways",
+}  # fmt: skip
+INSTRUCTIONS: dict[tuple[str, str], tuple[str, str]] = {
+    ("knee_flexion", "less"): ("bend", "Bend your {part} more"),
+    ("knee_flexion", "more"): ("straighten", "Bend your {part} less (straighten it sooner)"),
+    ("hip_flexion", "less"): ("bend", "Bend more at your {part}"),
+    ("hip_flexion", "more"): ("straighten", "Bend less at your {part}"),
+    ("hip_abduction", "less"): ("raise", "Raise your {part} further out to the side"),
+    ("hip_abduction", "more"): ("lower", "Lower your {part}: keep it closer to the other"),
+    ("ankle_dorsiflexion", "less"): ("bend", "Bend your {part} more"),
+    ("ankle_dorsiflexion", "more"): ("straighten", "Bend your {part} less"),
+    ("shoulder_flexion", "less"): ("raise", "Raise your {part} higher in front of you"),
+    ("shoulder_flexion", "more"): ("lower", "Lower your {part}: not as high in front of you"),
+    ("shoulder_abduction", "less"): ("raise", "Raise your {part} higher out to the side"),
+    ("shoulder_abduction", "more"): ("lower", "Lower your {part}: not as high out to the side"),
+    ("elbow_flexion", "less"): ("bend", "Bend your {part} more"),
+    ("elbow_flexion", "more"): ("straighten", "Straighten your {part} more"),
+    ("trunk_flexion", "less"): ("lean", "Lean your {part} further forward"),
+    ("trunk_flexion", "more"): ("straighten", "Straighten your {part}: lean forward less"),
+    ("trunk_lateral_flexion", "less"): ("bend", "Bend your {part} further to the side"),
+    ("trunk_lateral_flexion", "more"): ("straighten", "Straighten your {part}: lean sideways less"),
+}
+STILL_INSTRUCTION = ("keep still", "Keep your {part} still")
+
+
+def angle_part(name: str) -> str:
+    """The body part a clinical angle moves, in plain words: "left knee", "trunk"."""
+    base, side = split_side(name)
+    part = ANGLE_PARTS.get(base, base.split("_")[0])
+    return f"{side} {part}" if side else part

@@ -15,6 +15,11 @@ so a long condition may wrap), e.g.::
   Listing 7.2 prints the arrow as ``=``; every listing of the thesis writes ``->``, which we follow.
 * Texts are in double quotes on one line, with no escapes (Listing 7.2's STRING has no quote).
 * Extension: ``#`` starts a comment that runs to the end of the line.
+* Extension (corrections, issue 17): ``%KIND$ANGLE`` holds for a finding of the recording (see
+  `analysis.assessment.findings`): KIND is less, more, extra, good, fast or slow, ANGLE a clinical
+  angle (``%less$knee_flexion_left``); ``%fast`` / ``%slow`` have no angle. Their texts may hold
+  ``{part}``, ``{amount}``, ``{patient}``, ``{tutor}``, ``{percent}`` and ``{repetitions}``, filled
+  with the finding's figures (`analysis.feedback.advice`).
 
 :func:`parse_rules` raises :class:`GrammarError` (line, column, plain-words message) on bad input.
 """
@@ -44,6 +49,7 @@ tip: _TIP TEXT
 ?atom: _LPAR condition _RPAR
      | _TYPE _DOLLAR NUMBER       -> landmark_type
      | _AT JOINT _DOLLAR NUMBER   -> joint_level
+     | _PCT JOINT (_DOLLAR JOINT)? -> finding_is
 
 _ARROW: "->"
 _COMMA: ","
@@ -57,6 +63,7 @@ _RPAR: ")"
 _TYPE: "type"
 _DOLLAR: "$"
 _AT: "@"
+_PCT: "%"
 JOINT: /[A-Za-z_][A-Za-z0-9_.:]*/
 NUMBER: /[0-9]+/
 TEXT: /"[^"\n]*"/
@@ -79,6 +86,7 @@ _TERMINAL_WORDS = {
     "_TYPE": "type$N",
     "_DOLLAR": "'$'",
     "_AT": "@JOINT$N",
+    "_PCT": "%KIND$ANGLE",
     "JOINT": "a joint name",
     "NUMBER": "a number",
     "TEXT": "a text in double quotes",
@@ -118,6 +126,14 @@ class JointLevel:
 
 
 @dataclass(frozen=True)
+class FindingIs:
+    """``%KIND$ANGLE``: the recording has a finding of this kind on this angle ("" for tempo)."""
+
+    kind: str
+    angle: str = ""
+
+
+@dataclass(frozen=True)
 class Not:
     operand: Condition
 
@@ -134,7 +150,7 @@ class Or:
     right: Condition
 
 
-Condition = LandmarkType | JointLevel | Not | And | Or
+Condition = LandmarkType | JointLevel | FindingIs | Not | And | Or
 
 
 @dataclass(frozen=True)
@@ -191,6 +207,9 @@ class _ToTree(Transformer[Token, object]):
 
     def joint_level(self, children: list[Token]) -> Condition:
         return JointLevel(str(children[0]), int(children[1]))
+
+    def finding_is(self, children: list[Token]) -> Condition:
+        return FindingIs(str(children[0]), str(children[1]) if len(children) > 1 else "")
 
 
 @cache
@@ -302,7 +321,7 @@ def _unclosed_parenthesis(text: str, before: int) -> tuple[int, int] | None:
 
 # Printing: the inverse of parsing, used to write generated grammars.
 
-_PRECEDENCE = {Or: 1, And: 2, Not: 3, LandmarkType: 4, JointLevel: 4}
+_PRECEDENCE = {Or: 1, And: 2, Not: 3, LandmarkType: 4, JointLevel: 4, FindingIs: 4}
 _JOINT = re.compile(r"[A-Za-z_][A-Za-z0-9_.:]*\Z")
 
 
@@ -315,6 +334,10 @@ def format_condition(condition: Condition, parent: int = 0) -> str:
             if not _JOINT.match(joint):
                 raise ValueError(f"joint name {joint!r} cannot be written in a grammar")
             return f"@{joint}${level}"
+        case FindingIs(kind=kind, angle=angle):
+            if not _JOINT.match(kind) or (angle and not _JOINT.match(angle)):
+                raise ValueError(f"finding {kind!r} {angle!r} cannot be written in a grammar")
+            return f"%{kind}${angle}" if angle else f"%{kind}"
         case Not(operand=operand):
             return "!" + format_condition(operand, _PRECEDENCE[Not])
         case And(left=left, right=right) | Or(left=left, right=right):

@@ -25,6 +25,7 @@ from typing import Any
 from analysis.feedback.grammar import (
     And,
     Condition,
+    FindingIs,
     GrammarError,
     JointLevel,
     LandmarkType,
@@ -104,33 +105,46 @@ def _level(levels: Mapping[str, int], joint: str) -> int | None:
     return next((level for name, level in levels.items() if _key(name) == wanted), None)
 
 
-def matches(condition: Condition, landmark_type: int, levels: Mapping[str, int]) -> bool:
+def matches(
+    condition: Condition,
+    landmark_type: int,
+    levels: Mapping[str, int],
+    finding: tuple[str, str] | None = None,
+) -> bool:
     """Alg. 8: does ``condition`` hold for a landmark of this type with these joint levels?
 
     A joint missing from ``levels`` has no level (the thesis's *none*): ``@J$L`` is false for it.
+    ``finding``: (kind, angle) when a finding of the recording is matched instead of a landmark
+    (``%KIND$ANGLE`` holds for it alone); None for a landmark, where no ``%`` condition holds.
     """
     match condition:
+        case FindingIs(kind=kind, angle=angle):
+            return finding == (kind, angle)
         case LandmarkType(type=number):
             return number == landmark_type
         case JointLevel(joint=joint, level=level):
             return _level(levels, joint) == level
         case Not(operand=operand):
-            return not matches(operand, landmark_type, levels)
+            return not matches(operand, landmark_type, levels, finding)
         case And(left=left, right=right):
-            return matches(left, landmark_type, levels) and matches(right, landmark_type, levels)
+            return matches(left, landmark_type, levels, finding) and matches(
+                right, landmark_type, levels, finding
+            )
         case Or(left=left, right=right):
-            return matches(left, landmark_type, levels) or matches(right, landmark_type, levels)
+            return matches(left, landmark_type, levels, finding) or matches(
+                right, landmark_type, levels, finding
+            )
     raise TypeError(f"not a condition: {condition!r}")
 
 
-def _leaves(condition: Condition) -> Iterator[LandmarkType | JointLevel]:
+def _leaves(condition: Condition) -> Iterator[LandmarkType | JointLevel | FindingIs]:
     match condition:
         case Not(operand=operand):
             yield from _leaves(operand)
         case And(left=left, right=right) | Or(left=left, right=right):
             yield from _leaves(left)
             yield from _leaves(right)
-        case LandmarkType() | JointLevel():
+        case LandmarkType() | JointLevel() | FindingIs():
             yield condition
 
 
@@ -163,12 +177,23 @@ class Grammar:
             n.type for r in self.rules for n in _leaves(r.condition) if isinstance(n, LandmarkType)
         )
 
-    def match(self, landmark_type: int, levels: Mapping[str, int]) -> Match:
-        """Alg. 9: feedbacks and tips of every rule whose condition holds for this landmark."""
+    @property
+    def has_findings(self) -> bool:
+        """Whether any rule speaks of a finding (``%KIND$ANGLE``): the corrections style."""
+        return any(isinstance(n, FindingIs) for r in self.rules for n in _leaves(r.condition))
+
+    def match(
+        self,
+        landmark_type: int,
+        levels: Mapping[str, int],
+        finding: tuple[str, str] | None = None,
+    ) -> Match:
+        """Alg. 9: feedbacks and tips of every rule whose condition holds for this landmark (or,
+        given ``finding`` = (kind, angle), for that finding of the recording)."""
         feedbacks: dict[str, None] = {}  # dicts keep grammar order and drop repeats
         tips: dict[str, None] = {}
         for rule in self.rules:
-            if matches(rule.condition, landmark_type, levels):
+            if matches(rule.condition, landmark_type, levels, finding):
                 if rule.feedback is not None:
                     feedbacks[rule.feedback] = None
                 if rule.tip is not None:
@@ -224,8 +249,16 @@ class Grammar:
 
 
 def _problem(
-    node: LandmarkType | JointLevel, known: set[str], types: Collection[int] | None, n_levels: int
+    node: LandmarkType | JointLevel | FindingIs,
+    known: set[str],
+    types: Collection[int] | None,
+    n_levels: int,
 ) -> str:
+    if isinstance(node, FindingIs):
+        from analysis.assessment.findings import KINDS
+
+        known_kinds = ", ".join(KINDS)
+        return "" if node.kind in KINDS else f"unknown finding {node.kind} ({known_kinds})"
     if isinstance(node, LandmarkType):
         unknown = types is not None and node.type not in types
         return f"the exercise has no landmark type {node.type}" if unknown else ""

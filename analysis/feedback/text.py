@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from analysis.feedback.grammar import (
     And,
     Condition,
+    FindingIs,
     JointLevel,
     LandmarkType,
     Or,
@@ -191,27 +192,85 @@ def _joint_rules(joint: str, number: int, moment: str, levels: Sequence[int]) ->
     return rules
 
 
+def _finding_rule(kind: str, angle: str) -> Rule:
+    """The default sentence of one finding (`analysis.feedback.advice` fills the fields)."""
+    from analysis.clinical.labels import (
+        ANGLE_PAST,
+        INSTRUCTIONS,
+        STILL_INSTRUCTION,
+        angle_part,
+        split_side,
+    )
+
+    base = split_side(angle)[0]
+    part, past = angle_part(angle), ANGLE_PAST.get(base, "moved")
+    if kind == "extra":
+        text = (f"{STILL_INSTRUCTION[1].format(part=part)}: it {past} {{patient}} where the "
+                "demonstration stays within {tutor}, in {repetitions}")  # fmt: skip
+    elif kind == "good":
+        text = (f"Your {part} {past} {{patient}}, as far as the demonstration's {{tutor}}, "
+                "in {repetitions}")  # fmt: skip
+    else:
+        told = INSTRUCTIONS[(base, kind)][1].format(part=part)
+        text = (f"{told}, by about {{amount}}: it {past} {{patient}} against the "
+                "demonstration's {tutor} ({percent} of its range) in {repetitions}")  # fmt: skip
+    return Rule(FindingIs(kind, angle), feedback=text)
+
+
+_TEMPO_RULES = (
+    Rule(FindingIs("fast"), feedback="Slow down the movement of your {part}, by about {amount}: "
+         "each repetition took {percent} of the demonstration's time in {repetitions}"),
+    Rule(FindingIs("slow"), feedback="Speed up the movement of your {part}, by about {amount}: "
+         "each repetition took {percent} of the demonstration's time in {repetitions}"),
+)  # fmt: skip
+
+
+def correction_rules() -> list[Rule]:
+    """The default ``%KIND$ANGLE`` rules: every clinical angle the body has, and the tempo."""
+    from analysis.clinical.labels import ANGLE_PARTS
+
+    # the names of analysis.clinical.ANGLE_NAMES, from the labels (that package's angles module
+    # reads the pipeline's results, which read this package)
+    ANGLE_NAMES = [
+        name
+        for base in ANGLE_PARTS
+        for name in ((base,) if base.startswith("trunk") else (f"{base}_left", f"{base}_right"))
+    ]
+    rules = [
+        _finding_rule(kind, angle) for angle in ANGLE_NAMES for kind in ("less", "more", "extra")
+    ]
+    rules += [_finding_rule("good", angle) for angle in ANGLE_NAMES]
+    return rules + list(_TEMPO_RULES)
+
+
 def default_grammar(
     joints: Sequence[str],
     landmark_types: Mapping[int, str] | Sequence[str],
-    levels: Iterable[int] = (3, 4),
+    levels: Iterable[int] = (),
 ) -> str:
-    """Grammar text with, per landmark type and joint, a feedback for each of ``levels`` and a tip.
+    """Grammar text for a new exercise, in the corrections style: per clinical angle, a sentence
+    for a smaller range than the tutor's, a larger one, a movement where the tutor keeps still,
+    and one for a good range; and the tempo (too fast, too slow). Example line::
 
-    ``joints`` are skeleton (BVH) joint names; ``landmark_types`` maps type numbers to names
-    ("end of range"), or lists the names of types 1, 2, …. Levels 1 (as the tutor) and 2 say nothing
-    by default. Example line::
+        %less$knee_flexion_left -> F:"Bend your left knee more, by about {amount}: it bent
+        {patient} against the demonstration's {tutor} ({percent} of its range) in {repetitions}"
 
-        type$2 & @LeftLowerLeg$3 -> F:"At the end of range, your left lower leg moved noticeably
-        differently from the demonstration"
+    With ``levels`` (e.g. (3, 4)), the thesis's per-key-pose rules for each of ``joints`` at
+    those levels follow (one comment per key pose: the older style, off by default).
+    ``landmark_types`` maps type numbers to names, or lists the names of types 1, 2, ….
     """
     if not isinstance(landmark_types, Mapping):
         landmark_types = {n: name for n, name in enumerate(landmark_types, start=1)}
+    if not joints:
+        raise ValueError("a default grammar needs at least one joint")
+    lines = [
+        "# Default feedback grammar: edit the sentences freely. {part}, {amount}, {patient},",
+        "# {tutor}, {percent} and {repetitions} are filled with the recording's figures.",
+        "",
+        *(format_rule(r) for r in correction_rules()),
+    ]
     chosen = sorted(set(levels))
-    if not chosen or not joints:
-        raise ValueError("a default grammar needs at least one joint and one level")
-    lines = ["# Default feedback grammar: edit the sentences and tips freely."]
-    for number, name in sorted(landmark_types.items()):
+    for number, name in sorted(landmark_types.items()) if chosen else ():
         moment = _moment(name, number)
         for joint in joints:
             lines += ["", *(format_rule(r) for r in _joint_rules(joint, number, moment, chosen))]

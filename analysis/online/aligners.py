@@ -195,11 +195,56 @@ def forecast(recent: FloatArray, steps: int, kind: str) -> FloatArray:
     if not is_quaternion_kind(kind) or s == 0:
         v = (last - recent[0]) / max(s, 1)
         return last + k * v
-    q1 = last.reshape(-1, 4)
+    q0 = np.ascontiguousarray(recent[0], dtype=np.float64).reshape(-1, 4)
+    q1 = np.ascontiguousarray(last, dtype=np.float64).reshape(-1, 4)
+    return _spin_forward(q0, q1, float(s), steps).reshape(steps, -1)
+
+
+def forecast_reference(recent: FloatArray, steps: int) -> FloatArray:
+    """`forecast` for quaternion frames written with `analysis.kinematics.quaternions` (the
+    compiled `_spin_forward` is tested against it)."""
+    s = len(recent) - 1
+    k = np.arange(1, steps + 1, dtype=np.float64)[:, None]
+    q1 = recent[-1].reshape(-1, 4)
     q0 = quat.make_continuous(np.stack([recent[0].reshape(-1, 4), q1]))[0]
     omega = quat.to_rotvec(quat.multiply(q1, quat.conjugate(q0))) / s  # (J, 3) radians per frame
     steps_q = quat.from_rotvec(k[:, :, None] * omega[None])  # (steps, J, 4)
     return quat.multiply(steps_q, q1[None]).reshape(steps, -1)
+
+
+@nb.njit(cache=True, nogil=True)
+def _spin_forward(q0: FloatArray, q1: FloatArray, s: float, steps: int) -> FloatArray:
+    """Per joint: the mean angular step w from q0 to q1 over s frames, then exp(k w) q1 for
+    k = 1..steps: (steps, J, 4). A single frame is too little work for numpy's overheads."""
+    J = q1.shape[0]
+    out = np.empty((steps, J, 4))
+    for j in range(J):
+        aw, ax, ay, az = q1[j, 0], q1[j, 1], q1[j, 2], q1[j, 3]
+        bw, bx, by, bz = q0[j, 0], q0[j, 1], q0[j, 2], q0[j, 3]
+        if aw * bw + ax * bx + ay * by + az * bz < 0.0:  # the same hemisphere as q1
+            bw, bx, by, bz = -bw, -bx, -by, -bz
+        # r = q1 * conj(q0)
+        rw = aw * bw + ax * bx + ay * by + az * bz
+        rx = -aw * bx + ax * bw - ay * bz + az * by
+        ry = -aw * by + ax * bz + ay * bw - az * bx
+        rz = -aw * bz - ax * by + ay * bx + az * bw
+        if rw < 0.0:
+            rw, rx, ry, rz = -rw, -rx, -ry, -rz
+        norm_v = np.sqrt(rx * rx + ry * ry + rz * rz)
+        near = norm_v < 1e-12  # the rotation vector's length over norm_v, safely
+        scale = 2.0 / max(rw, 1e-300) if near else 2.0 * np.arctan2(norm_v, rw) / norm_v
+        wx, wy, wz = rx * scale / s, ry * scale / s, rz * scale / s
+        for k in range(steps):
+            vx, vy, vz = (k + 1) * wx, (k + 1) * wy, (k + 1) * wz
+            angle = np.sqrt(vx * vx + vy * vy + vz * vz)
+            half = 0.5 * angle
+            f = np.sin(half) / angle if angle > 1e-12 else 0.5
+            cw, cx, cy, cz = np.cos(half), f * vx, f * vy, f * vz
+            out[k, j, 0] = cw * aw - cx * ax - cy * ay - cz * az
+            out[k, j, 1] = cw * ax + cx * aw + cy * az - cz * ay
+            out[k, j, 2] = cw * ay - cx * az + cy * aw + cz * ax
+            out[k, j, 3] = cw * az + cx * ay - cy * ax + cz * aw
+    return out
 
 
 @nb.njit(cache=True, nogil=True)

@@ -4,6 +4,7 @@ A capture client sends JSON messages over a WebSocket (the server) or calls `han
 
     {"type": "start", "header": "HIERARCHY ... MOTION\\nFrames: 0\\nFrame Time: 0.0333\\n"}
     {"type": "frame", "seq": 0, "values": [c1, c2, ...]}       # or "line": "c1 c2 ..." (BVH text)
+    {"type": "frames", "seq": 3, "frames": [[c1, ...], "c1 c2 ...", ...]}  # a batch: seq 3, 4, ...
     {"type": "end"}
 
 Events back: ``ready`` (with ``next_seq``: where a reconnecting client resumes, and ``max_fps``),
@@ -12,6 +13,14 @@ Events back: ``ready`` (with ``next_seq``: where a reconnecting client resumes, 
 with the wrong number of values, a value that is not a finite number, a sequence number other
 than the next one (a repeat of an earlier one is ignored with a ``duplicate`` error, so a client
 resending after a reconnect loses nothing), or a frame over the rate limit (dropped and counted).
+
+A batch (up to `MAX_BATCH` frames, numbered from its ``seq``) saves a message per frame: a
+capture client at 120 frames/s sends three at a time, which costs the server a third of the
+messages for at most 17 ms more wait on the first frame. Its frames go through the same checks
+one by one; a refused frame of a batch gets its error and uses up its sequence number, so the
+frames after it in the batch are still taken (a batch cannot be half resent). A batch that
+starts after the next expected frame is refused whole (``out-of-order``); the frames of one that
+starts before it were already received and are skipped with one ``duplicate`` error.
 """
 
 from __future__ import annotations
@@ -30,6 +39,7 @@ from analysis.pipeline.model import FittedModel
 
 FloatArray = npt.NDArray[np.float64]
 MAX_HEADER_BYTES = 1 << 20
+MAX_BATCH = 64  # frames in one batch message
 MAX_VALUES = 8_000_000  # values kept per session, as for an upload (a 30-minute session)
 
 
@@ -64,13 +74,20 @@ class RateLimit:
         return True
 
 
+def _seq(message: dict[str, Any]) -> int:
+    seq = message.get("seq")
+    if not isinstance(seq, int) or isinstance(seq, bool):
+        raise ProtocolError("bad-seq", "a frame needs an integer 'seq'")
+    return seq
+
+
 def error_event(error: ProtocolError) -> Event:
     return {"event": "error", "code": error.code, "message": str(error), "seq": error.seq}
 
 
-def parse_values(message: dict[str, Any], n_channels: int, seq: int) -> FloatArray:
-    """The frame's channel values (C,), or ProtocolError saying what is wrong with them."""
-    raw = message.get("values", message.get("line"))
+def parse_values(raw: Any, n_channels: int, seq: int) -> FloatArray:
+    """A frame's channel values (C,) from a list of numbers or a BVH frame line, or
+    ProtocolError saying what is wrong with them."""
     if isinstance(raw, str):
         raw = raw.split()
     if not isinstance(raw, list):
@@ -79,8 +96,10 @@ def parse_values(message: dict[str, Any], n_channels: int, seq: int) -> FloatArr
         raise ProtocolError(
             "value-count", f"frame {seq} has {len(raw)} values; the skeleton has {n_channels}", seq
         )
-    try:
-        values = np.array([float(v) for v in raw], dtype=np.float64)
+    try:  # numpy reads a list of numbers (or of number strings) in one call
+        values = np.array(raw, dtype=np.float64)
+        if values.ndim != 1:
+            raise ValueError("nested")
     except (TypeError, ValueError):
         text = f"frame {seq} holds a value that is not a number"
         raise ProtocolError("not-a-number", text, seq) from None
@@ -107,6 +126,7 @@ class LiveSession:
         self.motion: Motion | None = None
         self.aligner: LiveAligner | None = None
         self.frames: list[FloatArray] = []
+        self.skipped = 0  # sequence numbers used up by refused frames of batches
         self.dropped = 0
         self.errors = 0
         self.ended = False
@@ -114,7 +134,7 @@ class LiveSession:
 
     @property
     def next_seq(self) -> int:
-        return len(self.frames)
+        return len(self.frames) + self.skipped
 
     def ready(self) -> Event:
         return {
@@ -136,11 +156,15 @@ class LiveSession:
         kind = message.get("type") if isinstance(message, dict) else None
         if kind == "frame":
             return self._frame(message)
+        if kind == "frames":
+            return self._batch(message)
         if kind == "start":
             return self._start(message)
         if kind == "end":
             return self.end()
-        raise ProtocolError("bad-message", "send a JSON object with type start, frame or end")
+        raise ProtocolError(
+            "bad-message", "send a JSON object with type start, frame, frames or end"
+        )
 
     def _start(self, message: dict[str, Any]) -> list[Event]:
         header = message.get("header")
@@ -160,18 +184,49 @@ class LiveSession:
         return [self.ready()]
 
     def _frame(self, message: dict[str, Any]) -> list[Event]:
-        if self.motion is None or self.aligner is None or self.ended:
-            raise ProtocolError("not-started", "send 'start' with the BVH header before frames")
-        seq = message.get("seq")
-        if not isinstance(seq, int) or isinstance(seq, bool):
-            raise ProtocolError("bad-seq", "a frame needs an integer 'seq'")
+        self._check_started()
+        seq = _seq(message)
         if seq < self.next_seq:
             raise ProtocolError("duplicate", f"frame {seq} was already received", seq)
         if seq > self.next_seq:
             raise ProtocolError(
                 "out-of-order", f"frame {seq} arrived; expected frame {self.next_seq}", seq
             )
-        values = parse_values(message, self.motion.skeleton.n_channels, seq)
+        return self._take(message.get("values", message.get("line")), seq)
+
+    def _batch(self, message: dict[str, Any]) -> list[Event]:
+        self._check_started()
+        first, frames = _seq(message), message.get("frames")
+        if not isinstance(frames, list) or not 0 < len(frames) <= MAX_BATCH:
+            text = f"a batch needs 'frames': a list of 1 to {MAX_BATCH} frames"
+            raise ProtocolError("bad-frame", text, first)
+        if first > self.next_seq:
+            text = f"a batch from frame {first} arrived; expected frame {self.next_seq}"
+            raise ProtocolError("out-of-order", text, first)
+        events: list[Event] = []
+        known = self.next_seq - first
+        if known > 0:
+            self.errors += 1
+            last = first + min(known, len(frames)) - 1
+            text = f"frames {first} to {last} were already received"
+            events.append(error_event(ProtocolError("duplicate", text, first)))
+        for offset in range(max(known, 0), len(frames)):
+            try:
+                events.extend(self._take(frames[offset], first + offset))
+            except ProtocolError as error:
+                self.errors += 1
+                self.skipped += 1
+                events.append(error_event(error))
+        return events
+
+    def _check_started(self) -> None:
+        if self.motion is None or self.aligner is None or self.ended:
+            raise ProtocolError("not-started", "send 'start' with the BVH header before frames")
+
+    def _take(self, raw: Any, seq: int) -> list[Event]:
+        """Check one frame's values and the limits, keep it, align it."""
+        assert self.motion is not None and self.aligner is not None
+        values = parse_values(raw, self.motion.skeleton.n_channels, seq)
         if (len(self.frames) + 1) * values.size > MAX_VALUES:
             raise ProtocolError("too-long", "the session holds as many frames as it can: end it")
         if not self.limit.allow():

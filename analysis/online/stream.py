@@ -15,10 +15,12 @@ message for bad input or a refused token.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
+from analysis.online.live import Event
 from analysis.online.session import LiveSession
 from analysis.online.sources import (
     Source,
@@ -28,22 +30,34 @@ from analysis.online.sources import (
     print_event,
     tcp_source,
 )
-from analysis.pipeline.model import load_model
+from analysis.pipeline.model import FittedModel, load_model
 
-__all__ = ["Source", "StreamInputError", "add_arguments", "header_text", "run"]
+__all__ = [
+    "Source",
+    "StreamInputError",
+    "add_arguments",
+    "header_text",
+    "run",
+    "session_events",
+]
 
 
-def run_in_process(model_path: str, source: Source) -> int:
-    """Frames into an in-process `LiveSession` (no server); prints its events."""
-    model = load_model(Path(model_path).read_bytes())
+def session_events(model: FittedModel, source: Source) -> Iterator[Event]:
+    """Every event of an in-process `LiveSession` fed the source's frames, then the summary
+    (what ``--model`` prints; the live evaluation runs the same)."""
     session = LiveSession(model, max_fps=float("inf"), burst=float("inf"))
     for event in session.handle({"type": "start", "header": source.header}):
         if event["event"] == "error":
             raise StreamInputError(event["message"])
     for seq, values in enumerate(source.frames):
-        for event in session.handle({"type": "frame", "seq": seq, "values": values.tolist()}):
-            print_event(event)
-    for event in session.end():
+        yield from session.handle({"type": "frame", "seq": seq, "values": values.tolist()})
+    yield from session.end()
+
+
+def run_in_process(model_path: str, source: Source) -> int:
+    """Frames into an in-process `LiveSession` (no server); prints its events."""
+    model = load_model(Path(model_path).read_bytes())
+    for event in session_events(model, source):
         print_event(event)
     return 0
 
@@ -71,6 +85,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tcp", help="relay BVH frame lines from HOST:PORT instead of a file")
     p.add_argument("--header", help="with --tcp: a BVH file giving the streamed skeleton")
     p.add_argument("--json-lines", action="store_true", help="one JSON object per line")
+    p.add_argument(
+        "--batch", type=int, help="with --server: frames per message (default: those of 25 ms)"
+    )
 
 
 def make_source(args: argparse.Namespace) -> Source:
@@ -95,4 +112,7 @@ def run(args: argparse.Namespace) -> int:
         return run_in_process(args.model, source)
     from analysis.online.remote import run_remote
 
-    return run_remote(args.server, args.token, args.patient, args.exercise, source)
+    batch = getattr(args, "batch", None)
+    if batch is not None and batch < 1:
+        raise StreamInputError(f"--batch must be 1 or more, got {batch}")
+    return run_remote(args.server, args.token, args.patient, args.exercise, source, batch=batch)

@@ -24,7 +24,9 @@ from analysis.bvh import Motion
 from analysis.feedback import Grammar, default_grammar
 from analysis.pipeline.model_fit import ModelComponents, TrainingRecording, fit_components
 
-FORMAT_VERSION = 2  # 2: the papers' parts (key poses, joint weights, pass threshold)
+FORMAT_VERSION = (
+    4  # 3: one calibrated score scale (pass at 70), corrections; 4: tutor-distance scale
+)
 MAGIC = b"PHYSIO-MODEL\n"
 FloatArray = npt.NDArray[np.float64]
 Progress = Callable[[str, float], None]

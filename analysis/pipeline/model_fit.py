@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -154,8 +154,9 @@ def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
     papers = fit_paper_parts(
         tutor, frames, types, involved_idx, axis.progress(flatten(all_points)), reps,
         _at_tutor_rate(training, tutor),
-        [(scorer.score(f), ok) for f, ok in labelled],
+        [(scorer.raw_score(f), ok) for f, ok in labelled],
     )  # fmt: skip
+    scorer = replace(scorer, raw_pass=papers.threshold.raw)  # its boundary onto the one scale
     components = ModelComponents(
         axis=axis,
         mirror=mirror,

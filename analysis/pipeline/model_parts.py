@@ -4,9 +4,10 @@ CMA-ES), the GB-DTW score scale and the pass threshold (001 eqs 13–15).
 
 A cold start (tutor only) trains on augmented copies of the tutor, as the design says: the
 key-pose classifier on warped, range-reduced copies (`analysis.landmarks.signature`), the joint
-weights on time-warped copies whose key poses are known, and the pass threshold is the score at
-which a repetition deviates from the tutor 1.5 times as much as the tutor's own repetitions
-deviate from each other (the cold scorer's midpoint, `analysis.assessment.scoring`).
+weights on time-warped copies whose key poses are known. The pass threshold is the same stated
+number on every exercise (`PASS_SCORE`, 70): what is fitted is where the raw score's own pass
+boundary lies (001 eqs 13–15 on labelled repetitions; the cold scorer's calibrated boundary
+otherwise), and the scorer maps that boundary onto 70 (`analysis.assessment.scoring`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from analysis.assessment.scoring import PASS_SCORE
 from analysis.bvh import Motion
 from analysis.dtw.joint_weights import JointWeightOptimizer
 from analysis.dtw.metrics import segment_labels
@@ -30,7 +32,6 @@ from analysis.online import BayesThreshold
 from analysis.pipeline.gestures import align_gesture, score_scale, wooe_options
 
 FloatArray = npt.NDArray[np.float64]
-COLD_THRESHOLD = 50.0
 WEIGHT_GENERATIONS = 8
 WEIGHT_FPS = 10.0  # joint weights decide which joints matter: a coarse timeline is enough
 WARPED_COPIES = 3
@@ -39,10 +40,12 @@ CV_FOLDS = 3
 
 @dataclass(frozen=True)
 class PassThreshold:
-    """The score (0–100) a repetition needs to pass, and how it was set."""
+    """The score (0–100) a repetition needs to pass (always `PASS_SCORE`), how the scale was
+    calibrated, and the raw score (classifier blend) that the calibration maps onto it."""
 
     value: float
-    source: str  # "labelled repetitions (Bayes, 001 eqs 13-15)" or "tutor variation"
+    source: str  # starts "labelled repetitions" or "tutor variation" (the web app reads which)
+    raw: float = PASS_SCORE
 
 
 def fit_landmarks(
@@ -139,8 +142,8 @@ def tutor_gesture_scale(
 
 
 def pass_threshold(scores: Sequence[float], correct: Sequence[bool]) -> PassThreshold:
-    """001 eqs 13–15 on labelled repetition scores when both classes have two or more; else the
-    cold scorer's midpoint (see the module docstring)."""
+    """Where the raw scores of labelled repetitions pass: 001 eqs 13–15 when both classes have two
+    or more; else the cold scorer's own boundary, already at `PASS_SCORE` (module docstring)."""
     y = np.asarray(correct, dtype=bool)
     if min(int(y.sum()), int((~y).sum())) >= 2:
         try:
@@ -149,8 +152,9 @@ def pass_threshold(scores: Sequence[float], correct: Sequence[bool]) -> PassThre
             bayes = None
         if bayes is not None and np.isfinite(bayes.threshold_):
             value = float(np.clip(bayes.threshold_, 1.0, 99.0))
-            return PassThreshold(round(value, 2), "labelled repetitions (Bayes, 001 eqs 13-15)")
-    return PassThreshold(COLD_THRESHOLD, "tutor variation")
+            source = "labelled repetitions (Bayes, 001 eqs 13-15), mapped onto the one scale"
+            return PassThreshold(PASS_SCORE, source, round(value, 2))
+    return PassThreshold(PASS_SCORE, "tutor variation, on the one scale")
 
 
 def rotations_at(motion: Motion, index: Sequence[int]) -> FloatArray:
@@ -193,7 +197,11 @@ class PaperParts:
                 "before": round(self.weight_error[0], 4),
                 "after": round(self.weight_error[1], 4),
             },
-            "pass_threshold": {"value": self.threshold.value, "source": self.threshold.source},
+            "pass_threshold": {
+                "value": self.threshold.value,
+                "source": self.threshold.source,
+                "raw_score_at_pass": self.threshold.raw,
+            },
             "gesture_scale": round(self.gesture_scale, 6),
         }
 
@@ -209,7 +217,8 @@ def fit_paper_parts(  # noqa: PLR0917 (the tutor's parts as fit_components holds
     scored: Sequence[tuple[float, bool]],
 ) -> PaperParts:
     """Fit every part; ``training``: labelled recordings at the tutor's frame rate; ``scored``:
-    (score, is correct) of the labelled repetitions; ``progress``: the tutor's progress signal."""
+    (raw score, is correct) of the labelled repetitions; ``progress``: the tutor's progress
+    signal."""
     landmarks = fit_landmarks(tutor, frames, types, training)
     index = list(joint_index)
     tutor_q = rotations_at(tutor, index)

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from analysis.feedback import Comment, LandmarkAssessment
+from analysis.feedback.advice import Advice
 
 JSON = dict[str, Any]
 
@@ -246,11 +247,13 @@ class AnalysisSummary:
     timings_ms: Mapping[str, float] = field(default_factory=dict)
     segmentation: str = "landmarks"  # "fallback": cut on the progress axis (no key-pose cycle)
     periodic: PeriodicSummary = field(default_factory=PeriodicSummary)
-    pass_threshold: float = 50.0  # on the 0–100 scale
+    pass_threshold: float = 70.0  # on the 0–100 scale; the same on every exercise since issue 17
     # anatomical name (CONTRACTS.md, e.g. "knee_flexion_left") -> its range over the recording
     clinical_angles: Mapping[str, AngleRange] = field(default_factory=dict)
     # "left" / "right" -> reachable workspace of that hand; only for exercises of the arms
     workspace: Mapping[str, WorkspaceSummary] = field(default_factory=dict)
+    # the few most important corrections and what went well; empty in runs stored before
+    advice: Advice = field(default_factory=Advice)
 
     @property
     def repetition_count(self) -> int:
@@ -284,6 +287,7 @@ class AnalysisSummary:
             "pass_threshold": self.pass_threshold,
             "clinical_angles": {k: v.to_json() for k, v in self.clinical_angles.items()},
             "workspace": {k: v.to_json() for k, v in self.workspace.items()},
+            "advice": self.advice.to_json(),
         }
 
     @classmethod
@@ -316,4 +320,5 @@ class AnalysisSummary:
                 str(k): WorkspaceSummary.from_json(v)
                 for k, v in (data.get("workspace") or {}).items()
             },
+            advice=Advice.from_json(data.get("advice")),
         )

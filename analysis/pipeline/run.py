@@ -85,12 +85,12 @@ STAGES = [
     ("repetitions", "counting repetitions"),
     ("synchronisation", "matching the reference in time"),
     ("alignment", "comparing each repetition"),
-    ("scores", "scoring repetitions"),
     ("assessment", "assessing each key pose"),
-    ("feedback", "writing feedback"),
+    ("scores", "scoring repetitions"),
     ("performance_level", "updating the level"),
     ("adjustment", "preparing the playback"),
     ("clinical_angles", "measuring joint angles"),
+    ("feedback", "writing feedback"),
     ("workspace", "measuring the reach of each hand"),
 ]
 
@@ -125,12 +125,12 @@ def analyse(
         if used_mirror:
             scored = replace(prepared, points=mirrored(prepared.points, parts.mirror))
         gestures = gesture_results(prepared, cut.segments, progress, sync, model)
-    with timer("scores"):
-        repetitions = repetition_results(scored, cut.segments, progress, model, gestures)
-    with timer("assessment"):
+    with timer("assessment"):  # before the scores: a clearly missed key pose caps its repetition
         assessment = assess_landmarks(prepared, landmarks, model)
-    with timer("feedback"):
-        feedback = feedback_items(assessment, model)
+    with timer("scores"):
+        repetitions = repetition_results(
+            scored, cut.segments, progress, model, gestures, assessment
+        )
     with timer("performance_level"):
         gamma = performance_level(assessment, history)
     with timer("adjustment"):
@@ -139,6 +139,8 @@ def analyse(
         series = angle_series(prepared.motion)
         angles = angle_ranges(series)
         repetitions = repetition_angles(series, repetitions)
+    with timer("feedback"):  # after the angles: corrections compare them with the tutor's
+        advice, feedback = feedback_items(repetitions, assessment, model, used_mirror)
     with timer("workspace"):
         workspace = workspace_summaries(prepared.motion, model.involved_joints)
     if on_progress is not None:
@@ -151,6 +153,7 @@ def analyse(
         score=_recording_score(repetitions),
         assessment=assessment,
         feedback=feedback,
+        advice=advice,
         gamma=gamma,
         mirrored=used_mirror,
         range_of_motion=joint_ranges(prepared, model),

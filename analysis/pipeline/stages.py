@@ -12,7 +12,20 @@ import numpy.typing as npt
 
 from analysis.adjustment import Performance, demonstration_skeletons, gamma_vector
 from analysis.assessment import landmark_features, repetition_features, update_levels
+from analysis.assessment.findings import (
+    RepetitionMeasures,
+    findings,
+    swapped_side,
+    tutor_ranges,
+    tutor_spreads,
+)
+from analysis.assessment.joints import N_LEVELS
+from analysis.assessment.scoring import MISSED_CAP, missed_key_pose
+from analysis.clinical import angle_ranges, angle_series
+from analysis.clinical.labels import angle_part
 from analysis.feedback import Comment, Grammar, LandmarkAssessment
+from analysis.feedback.advice import MAX_CORRECTIONS, Advice, advise
+from analysis.feedback.text import correction_rules
 from analysis.kinematics import flatten, range_of_motion, relative_to_start, translations
 from analysis.kinematics import quaternions as quat
 from analysis.landmarks import Segments
@@ -48,15 +61,17 @@ def _closest_type(prepared: Prepared, frame: int, types: list[int], model: Fitte
     return types[int(np.argmin(costs))]
 
 
-def repetition_results(
+def repetition_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds them)
     prepared: Prepared,
     segments: Segments,
     progress: FloatArray,
     model: FittedModel,
     gestures: Sequence[GestureResult],
+    assessment: Sequence[LandmarkAssessment] = (),
 ) -> tuple[RepetitionResult, ...]:
     """Per repetition: frames, score 0–100 and pass/fail, distance to the tutor, reach, tempo,
-    and the alignment stage's guidance, GB-DTW score and paper 003 figures."""
+    and the alignment stage's guidance, GB-DTW score and paper 003 figures. A repetition whose
+    key pose the per-joint assessment finds clearly missed scores below the pass threshold."""
     parts = model.components
     threshold = parts.papers.threshold.value
     movement = flatten(prepared.points[:, parts.scored_index])
@@ -69,12 +84,18 @@ def repetition_results(
         segment = relative_to_start(movement[start : end + 1])
         features = repetition_features(segment[::step], [t[::step] for t in parts.templates])
         dev = features[: len(parts.scored_index)]
-        score = round(parts.scorer.score(features), 2)
+        score = parts.scorer.score(features)
+        inside = [a.levels for a in assessment if start < a.frame <= end and a.type != 1]
+        reach = float(progress[peak] - progress[start])
+        # missed by falling short of it: going past the key pose is an overdone, not a miss
+        if reach < 1.0 and missed_key_pose(inside, N_LEVELS):
+            score = min(score, MISSED_CAP)
+        score = round(score, 2)
         gesture = gestures[k]
         out.append(RepetitionResult(
             start=int(start), end=int(end), peak=int(peak), score=score,
             deviation=round(float(dev.mean()), 5),
-            reach=round(float(progress[peak] - progress[start]), 3),
+            reach=round(reach, 3),
             tempo=round(float((end - start + 1) / tutor_frames), 3),
             guidance=gesture.guidance, passed=bool(score >= threshold),
             gbdtw_score=gesture.score, alignment_tau=gesture.alignment_tau,
@@ -101,11 +122,53 @@ def assess_landmarks(
     )
 
 
+def tutor_angle_ranges(model: FittedModel) -> tuple[dict[str, float], dict[str, float]]:
+    """The median range (degrees) of each clinical angle over the tutor's repetitions, and its
+    SD over them."""
+    series = angle_series(model.tutor)
+    per_repetition = [{k: v.range for k, v in angle_ranges(series, a, b).items()}
+                      for a, b in model.components.tutor_reps]  # fmt: skip
+    return tutor_ranges(per_repetition), tutor_spreads(per_repetition)
+
+
+def main_part(tutor: Mapping[str, float]) -> str:
+    """What the tutor moves most, in plain words ("both arms", "left knee", "trunk")."""
+    if not tutor:
+        return "body"
+    top = max(tutor, key=lambda k: tutor[k])
+    other = tutor.get(swapped_side(top), 0.0)
+    if other != tutor[top] and other >= 0.7 * tutor[top]:
+        return angle_part(top).split(" ", 1)[1] + "s"  # "elbows": both sides move
+    return angle_part(top)
+
+
 def feedback_items(
-    assessment: tuple[LandmarkAssessment, ...], model: FittedModel
-) -> tuple[Comment, ...]:
-    """Feedback sentences from the exercise's grammar."""
-    return tuple(Grammar.parse(model.grammar).comments(list(assessment)))
+    repetitions: tuple[RepetitionResult, ...],
+    assessment: tuple[LandmarkAssessment, ...],
+    model: FittedModel,
+    mirrored: bool,
+) -> tuple[Advice, tuple[Comment, ...]]:
+    """The corrections and what went well (`analysis.feedback.advice`), said by the exercise's
+    grammar; and the feedback list: the corrections at the frame where each first happened,
+    then, for an older grammar written per key pose, its comments with repeats left out."""
+    grammar = Grammar.parse(model.grammar)
+    tutor, spread = tutor_angle_ranges(model)
+    measures = [
+        RepetitionMeasures(
+            r.start, {k: v.range for k, v in r.clinical_angles.items()}, r.tempo, r.passed
+        )
+        for r in repetitions
+    ]
+    found = findings(measures, tutor, mirrored, spread)
+    fallback = None if grammar.has_findings else Grammar(tuple(correction_rules()))
+    advice = advise(grammar, found, len(repetitions), main_part(tutor), fallback)
+    comments = [Comment(c.frame, c.text) for c in advice.corrections]
+    said = {c.text for c in comments}
+    for comment in grammar.comments(list(assessment)) if not grammar.has_findings else ():
+        if comment.feedback not in said and len(comments) < MAX_CORRECTIONS:
+            comments.append(comment)
+            said.add(comment.feedback)
+    return advice, tuple(comments)
 
 
 def performance_level(

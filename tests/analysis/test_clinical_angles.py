@@ -1,5 +1,10 @@
-"""Anatomical joint angles: known poses of synthetic rigs (Kinect and Mixamo names, T-pose rest,
-any heading), the positions-only cross-check on UI-PRMD, ranges and norms."""
+"""Anatomical joint angles: known poses of four rigs (a synthetic Kinect-style T-pose rig, the
+UI-PRMD Kinect skeleton and two CMU conversions from data/rigs, whose legs slant 20° outwards in
+their rest pose and whose lower back, neck and collars are zero-length connector joints), every
+angle in its own plane on each side, within 1°, at any heading; the arm forward (all flexion)
+and diagonal (elevation split by its plane); the positions-only cross-check on UI-PRMD (the
+knee-flexion range of every deep squat within 5°) and the UI-PRMD squatters' raised arms,
+ranges and norms."""
 
 from __future__ import annotations
 
@@ -7,8 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
-from analysis.bvh import read
+from analysis.bvh import Motion, Skeleton, read
 from analysis.clinical import (
     ANGLE_NAMES,
     angle_ranges,
@@ -19,8 +25,9 @@ from analysis.clinical import (
 from analysis.pipeline.results import AngleRange
 from tests.synthetic_poses import MIXAMO_NAMES, posed, rot
 
-UI_PRMD = Path(__file__).resolve().parents[2] / "data" / "ui-prmd" / "sessions"
-TOL = 2.0
+DATA = Path(__file__).resolve().parents[2] / "data"
+UI_PRMD = DATA / "ui-prmd" / "sessions"
+TOL = 1.0
 
 # One plane at a time: (pose as world rotations of segments, angle, expected degrees).
 KNOWN = [
@@ -179,3 +186,283 @@ def test_repetitions_carry_their_own_ranges_in_tenths_of_a_degree():
     assert RepetitionResult.from_json(as_objects).clinical_angles["knee_flexion_left"].range == 9
     assert "clinical_angles" not in reps[0].to_json()  # absent when not measured: small JSON
     assert RepetitionResult.from_json(reps[0].to_json()).clinical_angles == {}
+
+
+# --- Known angles on any rig ---------------------------------------------------------------
+# A rig is posed by the world rotation of each segment on top of its anatomical pose: trunk
+# upright as in the rest pose, each limb segment turned (shortest arc) from its rest direction to
+# hang straight down, the foot keeping its rest angle to the shank. The person faces +z, left is
+# +x, y is up. Segments: (proximal joint, distal joint) per rig, written out by hand so the poser
+# does not lean on the joint finding under test.
+SEGMENTS = ("thigh", "shank", "foot", "upper_arm", "forearm")
+RIGS = {
+    "kinect-synthetic": (
+        None, "Waist", "Spine",
+        {"thigh": ("UpperLeg", "LowerLeg"), "shank": ("LowerLeg", "Foot"),
+         "foot": ("Foot", "Toes"), "upper_arm": ("UpperArm", "Forearm"),
+         "forearm": ("Forearm", "Hand")},
+    ),
+    "ui-prmd": (
+        UI_PRMD / "m01_s01_correct.bvh.gz", "Waist", "Spine",
+        {"thigh": ("UpperLeg", "LowerLeg"), "shank": ("LowerLeg", "Foot"),
+         "foot": ("Foot", "Toes"), "upper_arm": ("UpperArm", "Forearm"),
+         "forearm": ("Forearm", "Hand")},
+    ),
+    "cmu": (
+        DATA / "rigs" / "assimp_01_01.bvh", "Hips", "LowerBack",
+        {"thigh": ("UpLeg", "Leg"), "shank": ("Leg", "Foot"), "foot": ("Foot", "ToeBase"),
+         "upper_arm": ("Arm", "ForeArm"), "forearm": ("ForeArm", "Hand")},
+    ),
+    # CMU's "3dsMax-friendly" conversion: LeftShoulder is the upper arm, ZXY and ZYX in one file.
+    "cmu-3dsmax": (
+        DATA / "rigs" / "bvh11_131_01.bvh", "Hips", "lowerback",
+        {"thigh": ("Hip", "Knee"), "shank": ("Knee", "Ankle"), "foot": ("Ankle", "Toe"),
+         "upper_arm": ("Shoulder", "Elbow"), "forearm": ("Elbow", "Wrist")},
+    ),
+}  # fmt: skip
+SIGN = {"left": 1.0, "right": -1.0}  # abduction of the left side turns about +z, the right's -z
+
+
+def rig(name: str) -> tuple[Skeleton, dict[str, str]]:
+    """The skeleton and segment -> joint name of its proximal end ("thigh_left": "LeftUpLeg")."""
+    path, pelvis, trunk, parts = RIGS[name]
+    from tests.synthetic_poses import skeleton as synthetic
+
+    sk = synthetic() if path is None else read(path).skeleton
+    joints = {"pelvis": pelvis, "trunk": trunk}
+    ends = {}
+    for side in ("left", "right"):
+        for seg, (a, b) in parts.items():
+            joints[f"{seg}_{side}"] = side.capitalize() + a
+            ends[f"{seg}_{side}"] = side.capitalize() + b
+    assert set(joints.values()) | set(ends.values()) <= set(sk.names)
+    return sk, {**joints, **{f"{k}:end": v for k, v in ends.items()}}
+
+
+def rest_points(sk: Skeleton) -> np.ndarray:
+    points = np.zeros((len(sk.names), 3))
+    for j, parent in enumerate(sk.parents):
+        points[j] = sk.offsets[j] + (points[parent] if parent >= 0 else 0.0)
+    return points
+
+
+def shortest_arc(v: np.ndarray, target: np.ndarray) -> np.ndarray:
+    v, target = v / np.linalg.norm(v), target / np.linalg.norm(target)
+    axis = np.cross(v, target)
+    angle = np.arctan2(np.linalg.norm(axis), v @ target)
+    if np.linalg.norm(axis) < 1e-12:
+        return np.eye(3)
+    return Rotation.from_rotvec(axis / np.linalg.norm(axis) * angle).as_matrix()
+
+
+def dorsiflexion(sk: Skeleton, roles: dict[str, str], side: str, degrees: float) -> np.ndarray:
+    """Turn of the foot in the plane of shank and foot, toes towards the shin."""
+    rest = rest_points(sk)
+    at = {n: i for i, n in enumerate(sk.names)}
+    shank = rest[at[roles[f"shank_{side}:end"]]] - rest[at[roles[f"shank_{side}"]]]
+    foot = rest[at[roles[f"foot_{side}:end"]]] - rest[at[roles[f"foot_{side}"]]]
+    hang = shortest_arc(shank, np.array([0.0, -1.0, 0.0]))
+    axis = np.cross(hang @ foot, [0.0, 1.0, 0.0])
+    return Rotation.from_rotvec(axis / np.linalg.norm(axis) * np.radians(degrees)).as_matrix()
+
+
+def world_rotations(sk: Skeleton, roles: dict[str, str], pose: dict, heading: float) -> list:
+    """Global rotation of every joint: heading @ pose @ anatomical alignment, both inherited
+    down the tree where a joint is not a segment's proximal end."""
+    segment_of = {roles[k]: k for k in roles if not k.endswith(":end")}
+    rest = rest_points(sk)
+    at = {n: i for i, n in enumerate(sk.names)}
+    turn = Rotation.from_euler("y", heading, degrees=True).as_matrix()
+    posed, aligned, world = [], [], []
+    for j, parent in enumerate(sk.parents):
+        seg = segment_of.get(sk.names[j])
+        p = pose.get(seg, posed[parent] if parent >= 0 else np.eye(3))
+        a = aligned[parent] if parent >= 0 else np.eye(3)
+        if seg is not None and seg.split("_")[0] in ("thigh", "shank", "upper", "forearm"):
+            end = rest[at[roles[f"{seg}:end"]]] - rest[j]
+            a = shortest_arc(end, np.array([0.0, -1.0, 0.0]))
+        posed.append(p)
+        aligned.append(a)
+        world.append(turn @ p @ a)
+    return world
+
+
+def channels_of(sk: Skeleton, world: list) -> np.ndarray:
+    """One frame of BVH channels (each joint's own rotation order) for these global rotations."""
+    row = []
+    for j, parent in enumerate(sk.parents):
+        local = world[j] if parent < 0 else world[parent].T @ world[j]
+        order = "".join(c[0] for c in sk.channels[j] if c.endswith("rotation"))
+        euler = dict(
+            zip(order, Rotation.from_matrix(local).as_euler(order, degrees=True), strict=True)
+        )
+        for channel in sk.channels[j]:
+            row.append(euler[channel[0]] if channel.endswith("rotation") else 0.0)
+    return np.array(row)
+
+
+def posed_on(rig_name: str, pose_of, heading: float = 0.0) -> dict[str, float]:
+    sk, roles = rig(rig_name)
+    pose = pose_of(sk, roles)
+    row = channels_of(sk, world_rotations(sk, roles, pose, heading))
+    series = angle_series(Motion(sk, row[None, :], 1 / 30))
+    return {k: float(v[0]) for k, v in series.items()}
+
+
+def _turn(axis: str, degrees: float):
+    return lambda seg: lambda sk, roles: {seg: rot(axis, degrees)}
+
+
+def known_poses():
+    """(angle, expected degrees, pose builder): each movement alone, in its own plane."""
+    cases = [
+        ("trunk_flexion", 30.0, _turn("x", 30.0)("trunk")),
+        ("trunk_lateral_flexion", 20.0, _turn("z", 20.0)("trunk")),  # to the right (−x)
+    ]
+    for side, s in SIGN.items():
+        cases += [
+            (f"knee_flexion_{side}", 90.0, _turn("x", 90.0)(f"shank_{side}")),
+            (f"hip_flexion_{side}", 60.0, _turn("x", -60.0)(f"thigh_{side}")),
+            (f"hip_abduction_{side}", 30.0, _turn("z", s * 30.0)(f"thigh_{side}")),
+            (f"shoulder_flexion_{side}", 90.0, _turn("x", -90.0)(f"upper_arm_{side}")),
+            (f"shoulder_abduction_{side}", 120.0, _turn("z", s * 120.0)(f"upper_arm_{side}")),
+            (f"elbow_flexion_{side}", 90.0, _turn("x", -90.0)(f"forearm_{side}")),
+            (
+                f"ankle_dorsiflexion_{side}", 15.0,
+                lambda sk, roles, side=side: {f"foot_{side}": dorsiflexion(sk, roles, side, 15.0)},
+            ),
+        ]  # fmt: skip
+    return cases
+
+
+KNOWN_ON_RIGS = known_poses()
+
+
+@pytest.mark.parametrize("rig_name", list(RIGS))
+def test_anatomical_pose_of_every_rig_reads_zero(rig_name):
+    angles = posed_on(rig_name, lambda sk, roles: {})
+    assert set(angles) == set(ANGLE_NAMES)
+    assert all(abs(v) < 1e-6 for v in angles.values()), angles
+
+
+@pytest.mark.parametrize(
+    ("name", "expected", "pose_of"), KNOWN_ON_RIGS, ids=[k[0] for k in KNOWN_ON_RIGS]
+)
+@pytest.mark.parametrize("heading", [0.0, -110.0])
+@pytest.mark.parametrize("rig_name", list(RIGS))
+def test_each_angle_alone_within_one_degree_on_every_rig(
+    rig_name, heading, name, expected, pose_of
+):
+    angles = posed_on(rig_name, pose_of, heading)
+    assert angles[name] == pytest.approx(expected, abs=1.0)
+    moved_too = {n for n in angles if n != name and abs(angles[n]) >= 1.0}
+    assert not moved_too, {n: round(angles[n], 2) for n in moved_too}  # one plane, one angle
+
+
+@pytest.mark.parametrize("rig_name", list(RIGS))
+def test_opposite_movements_are_negative_on_every_rig(rig_name):
+    pose = lambda seg, axis, deg: lambda sk, roles: {seg: rot(axis, deg)}  # noqa: E731
+    assert posed_on(rig_name, pose("thigh_right", "x", 20.0))["hip_flexion_right"] == (
+        pytest.approx(-20.0, abs=1.0)
+    )
+    assert posed_on(rig_name, pose("thigh_left", "z", -10.0))["hip_abduction_left"] == (
+        pytest.approx(-10.0, abs=1.0)
+    )
+    assert posed_on(rig_name, pose("trunk", "x", -10.0))["trunk_flexion"] == pytest.approx(
+        -10.0, abs=1.0
+    )
+    plantar = posed_on(
+        rig_name, lambda sk, roles: {"foot_left": dorsiflexion(sk, roles, "left", -30.0)}
+    )
+    assert plantar["ankle_dorsiflexion_left"] == pytest.approx(-30.0, abs=1.0)
+
+
+DEEP_SQUATS = sorted(UI_PRMD.glob("m01_*.bvh.gz"))
+
+
+def test_the_repository_holds_the_ui_prmd_deep_squats():
+    assert len(DEEP_SQUATS) == 14  # subjects s01–s07, correct and incorrect (README.md there)
+
+
+@pytest.mark.parametrize("path", DEEP_SQUATS, ids=[p.name.split(".")[0] for p in DEEP_SQUATS])
+def test_deep_squat_knee_flexion_range_agrees_with_positions_within_5_degrees(path):
+    motion = read(path)
+    by_rotation = clinical_angles(motion)
+    by_position = angle_ranges(angle_series(motion, method="positions"))
+    for side in ("left", "right"):
+        name = f"knee_flexion_{side}"
+        assert by_rotation[name].range > 60.0  # a squat bends the knees
+        assert abs(by_rotation[name].range - by_position[name].range) < 5.0
+        assert abs(by_rotation[name].max - by_position[name].max) < 5.0
+
+
+def arm_towards(side: str, elevation: float, plane: float):
+    """Pose the upper arm raised ``elevation`` degrees from hanging, in the vertical plane
+    ``plane`` degrees from the frontal plane towards the front (0: straight out to the side,
+    90: straight forward, −90: backward); shortest arc from hanging, so no roll."""
+    lateral = np.array([SIGN[side], 0.0, 0.0])  # the person faces +z, left is +x
+    forward = np.array([0.0, 0.0, 1.0])
+    e, p = np.radians(elevation), np.radians(plane)
+    target = np.sin(e) * (np.cos(p) * lateral + np.sin(p) * forward) - np.cos(e) * np.array(
+        [0.0, 1.0, 0.0]
+    )
+    turn = shortest_arc(np.array([0.0, -1.0, 0.0]), target)
+    return lambda sk, roles: {f"upper_arm_{side}": turn}
+
+
+# (elevation, plane of elevation) -> (flexion, abduction): elevation × the plane's share.
+ARM_DIRECTIONS = [
+    (90.0, 90.0, 90.0, 0.0),  # forward, horizontal: all flexion, no abduction
+    (150.0, 90.0, 150.0, 0.0),  # forward and up
+    (90.0, 45.0, 63.64, 63.64),  # diagonally forward and out (scapular-ish plane), horizontal
+    (135.0, 45.0, 95.46, 95.46),  # the same diagonal, above the head
+    (130.0, 10.0, 22.57, 128.03),  # UI-PRMD deep-squat arms: overhead V, a little forward
+    (40.0, -90.0, -40.0, 0.0),  # backward: extension
+]
+
+
+@pytest.mark.parametrize(
+    "case", ARM_DIRECTIONS, ids=[f"{c[0]:g}-in-{c[1]:g}" for c in ARM_DIRECTIONS]
+)
+@pytest.mark.parametrize("side", ["left", "right"])
+@pytest.mark.parametrize("heading", [0.0, -110.0])
+@pytest.mark.parametrize("rig_name", list(RIGS))
+def test_arm_forward_or_diagonal_splits_elevation_by_its_plane(rig_name, heading, side, case):
+    elevation, plane, flexion, abduction = case
+    angles = posed_on(rig_name, arm_towards(side, elevation, plane), heading)
+    assert angles[f"shoulder_flexion_{side}"] == pytest.approx(flexion, abs=TOL)
+    assert angles[f"shoulder_abduction_{side}"] == pytest.approx(abduction, abs=TOL)
+    others = {n: v for n, v in angles.items() if not n.startswith("shoulder_") and abs(v) >= TOL}
+    assert not others, others
+
+
+def _arm_frames(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame: is either wrist above the top of the head (positions), and both
+    shoulder abductions (orientations)."""
+    from analysis.kinematics import positions
+
+    motion = read(path)
+    at = {n: i for i, n in enumerate(motion.skeleton.names)}
+    pos = positions(motion)
+    above = np.stack(
+        [pos[:, at[f"{s}Hand"], 1] > pos[:, at["HeadTip"], 1] for s in ("Left", "Right")]
+    )
+    series = angle_series(motion)
+    return above, np.stack([series[f"shoulder_abduction_{s}"] for s in ("left", "right")])
+
+
+@pytest.mark.parametrize("subject", ["s01", "s04", "s07"])
+def test_ui_prmd_deep_squat_arms_are_really_raised_overhead(subject):
+    # The large shoulder abduction on UI-PRMD squats is the subjects' posture (arms held up in
+    # a V, wrists above the head), not a rest-pose or projection artefact.
+    above, abduction = _arm_frames(UI_PRMD / f"m01_{subject}_correct.bvh.gz")
+    assert above.mean() > 0.95
+    assert np.all((np.median(abduction, axis=1) > 100) & (np.median(abduction, axis=1) < 160))
+
+
+def test_ui_prmd_shoulder_abduction_exercise_moves_one_arm_from_hanging():
+    _, abduction = _arm_frames(UI_PRMD / "m07_s01_correct.bvh.gz")
+    low, high = np.percentile(abduction, [5, 95], axis=1)
+    assert np.all(low < 25)  # both arms hang between repetitions
+    assert high.min() < 25  # one arm stays down
+    assert high.max() > 110  # the other is abducted above the shoulder

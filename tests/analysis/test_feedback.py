@@ -496,10 +496,12 @@ def test_joint_label(name: str, label: str) -> None:
 
 def test_default_grammar_for_ui_prmd_skeleton() -> None:
     joints = read(UI_PRMD_REP).skeleton.names
-    text = default_grammar(joints, ["start", "end of range"])
+    text = default_grammar(joints, ["start", "end of range"], levels=(3, 4))
     parsed = Grammar.parse(text)
-    assert len(parsed.rules) == 2 * len(joints) * 3
+    corrections = 4 * 16 + 2  # less, more, extra, good per clinical angle; too fast, too slow
+    assert len(parsed.rules) == corrections + 2 * len(joints) * 3
     assert parsed.problems(joints, types={1, 2}) == ()
+    assert Grammar.parse(default_grammar(joints, ["start"])).has_findings
     quiet = {j: 1 for j in joints}
     assert parsed.comments([LandmarkAssessment(f, t, quiet) for f, t in [(0, 1), (40, 2)]]) == []
     mild = parsed.comments([LandmarkAssessment(0, 2, quiet | {"LeftLowerLeg": 2})])
@@ -509,7 +511,7 @@ def test_default_grammar_for_ui_prmd_skeleton() -> None:
 @pytest.mark.parametrize(("level", "how"), [(3, "noticeably"), (4, "very")])
 def test_default_grammar_speaks_for_bad_levels(level: int, how: str) -> None:
     joints = ["Waist", "LeftUpperLeg", "LeftLowerLeg"]
-    parsed = Grammar.parse(default_grammar(joints, {1: "start", 2: "end of range"}))
+    parsed = Grammar.parse(default_grammar(joints, {1: "start", 2: "end of range"}, (3, 4)))
     levels = {"Waist": 1, "LeftUpperLeg": 1, "LeftLowerLeg": level}
     first, second = parsed.comments(
         [LandmarkAssessment(40, 2, levels), LandmarkAssessment(80, 2, levels)]

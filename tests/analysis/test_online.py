@@ -188,3 +188,17 @@ def test_forward_plot_options_are_validated() -> None:
         ForwardPlotOptions(method="D")  # type: ignore[arg-type]
     with pytest.raises(ValueError):
         ForwardPlotOptions(window=1)
+
+
+def test_compiled_quaternion_forecast_equals_the_numpy_one() -> None:
+    from analysis.online.aligners import forecast_reference
+
+    rng = np.random.default_rng(3)
+    for trial in range(10):
+        q = quat.normalize(rng.standard_normal((7, 5, 4)))
+        q = quat.make_continuous(q) if trial % 2 else q  # and frames in opposite hemispheres
+        recent = q.reshape(7, -1)
+        ahead = forecast(recent, 13, "quaternion")
+        np.testing.assert_allclose(ahead, forecast_reference(recent, 13), atol=1e-10)
+    still = np.tile(quat.normalize(rng.standard_normal((1, 3, 4))).reshape(1, -1), (4, 1))
+    np.testing.assert_allclose(forecast(still, 3, "quaternion"), np.tile(still[:1], (3, 1)))

@@ -23,11 +23,12 @@ PAPER_STAGES = (
     "repetitions",
     "synchronisation",
     "alignment",
-    "scores",
     "assessment",
-    "feedback",
+    "scores",
     "performance_level",
     "adjustment",
+    "clinical_angles",
+    "feedback",  # after the angles: the corrections compare them with the tutor's
 )
 
 

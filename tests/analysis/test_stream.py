@@ -81,13 +81,17 @@ def test_stream_counts_the_offline_repetitions(exercise, model, model_path, tmp_
 
 
 def test_tutor_playback_never_goes_back_within_a_repetition(model, model_path, capsys):
+    """One repetition: the playback only moves forward until the repetition is counted, then
+    starts the tutor's movement again for the next one."""
     capsys.readouterr()
     main(["stream", "--model", str(model_path), str(DATA / "reps/m07_s01_e02.bvh.gz"),
           "--speed", "max", "--json-lines"])  # fmt: skip
-    tutor = [
-        e["tutor_frame"] for e in events_of(capsys.readouterr().out) if e["event"] == "position"
-    ]
-    assert np.all(np.diff(tutor) >= 0) and tutor[-1] > tutor[0]
+    events = events_of(capsys.readouterr().out)
+    counted = next(k for k, e in enumerate(events) if e["event"] == "repetition")
+    tutor = [e["tutor_frame"] for e in events[:counted] if e["event"] == "position"]
+    assert np.all(np.diff(tutor) >= 0) and tutor[-1] - tutor[0] > 40
+    after = [e["tutor_frame"] for e in events[counted:] if e["event"] == "position"]
+    assert after[0] < tutor[-1] and np.all(np.diff(after) >= 0)
 
 
 def test_bad_input_exits_2_with_one_line(model_path, tmp_path, capsys):
@@ -233,3 +237,106 @@ def test_client_resumes_after_a_dropped_connection(model, capsys):
     assert len(connections) == 2
     assert summary["frames"] == motion.n_frames
     assert np.array_equal(np.vstack(session.frames), motion.frames)
+
+
+TIMINGS = ("latency_ms", "cpu_ms")  # measured, so not the same twice
+
+
+def test_a_batch_is_taken_as_its_frames_one_by_one(model):
+    start, frames = start_message(DATA / "reps/m07_s01_e02.bvh.gz")
+    single, batched = LiveSession(model), LiveSession(model)
+    single.handle(start), batched.handle(start)
+    one = [e for seq, v in enumerate(frames) for e in single.handle(
+        {"type": "frame", "seq": seq, "values": v.tolist()})]  # fmt: skip
+    many = []
+    for first in range(0, len(frames), 3):
+        part = [v.tolist() for v in frames[first : first + 3]]
+        if first == 3:  # a frame as a BVH line is taken too
+            part[0] = " ".join(map(str, part[0]))
+        many += batched.handle({"type": "frames", "seq": first, "frames": part})
+    strip = [{k: v for k, v in e.items() if k not in TIMINGS} for e in one]
+    assert [{k: v for k, v in e.items() if k not in TIMINGS} for e in many] == strip
+    assert any(e["event"] == "position" for e in many)
+    assert batched.next_seq == len(frames) and np.array_equal(
+        np.vstack(batched.frames), np.vstack(single.frames)
+    )
+
+
+def test_a_bad_frame_of_a_batch_gets_its_error_and_the_rest_are_taken(model):
+    session = LiveSession(model)
+    start, frames = start_message(DATA / "reps/m07_s01_e02.bvh.gz")
+    session.handle(start)
+    good = [v.tolist() for v in frames[:8]]
+    session.handle({"type": "frames", "seq": 0, "frames": good[:4]})
+    batch = [good[4], [float("nan"), *good[5][1:]], good[6][:-1], good[7]]
+    events = session.handle({"type": "frames", "seq": 4, "frames": batch})
+    errors = [e for e in events if e["event"] == "error"]
+    assert [(e["code"], e["seq"]) for e in errors] == [("not-finite", 5), ("value-count", 6)]
+    assert len(session.frames) == 6 and session.next_seq == 8  # 5 and 6 used up, 7 taken
+    assert np.array_equal(session.frames[-1], frames[7])
+    after = session.handle({"type": "frame", "seq": 8, "values": frames[8].tolist()})
+    assert not [e for e in after if e["event"] == "error"]
+    assert session.end()[-1]["errors"] == 2
+
+
+def test_an_out_of_order_batch_is_refused_and_a_resent_one_skips_what_was_taken(model):
+    session = LiveSession(model)
+    start, frames = start_message(DATA / "reps/m07_s01_e02.bvh.gz")
+    session.handle(start)
+    values = [v.tolist() for v in frames[:10]]
+    session.handle({"type": "frames", "seq": 0, "frames": values[:3]})
+    ahead = session.handle({"type": "frames", "seq": 5, "frames": values[5:8]})
+    assert [(e["code"], e["seq"]) for e in ahead] == [("out-of-order", 5)]
+    assert session.next_seq == 3
+    again = session.handle({"type": "frames", "seq": 1, "frames": values[1:6]})
+    assert [(e["code"], e["seq"]) for e in again if e["event"] == "error"] == [("duplicate", 1)]
+    assert session.next_seq == 6 and np.array_equal(np.vstack(session.frames), frames[:6])
+    for bad in ({"seq": 6, "frames": []}, {"seq": 6, "frames": "x"}, {"frames": [values[6]]}):
+        (answer,) = session.handle({"type": "frames", **bad})
+        assert answer["code"] in ("bad-frame", "bad-seq")
+    assert session.next_seq == 6
+
+
+def test_default_batch_adds_at_most_25_ms():
+    from analysis.online.remote import default_batch
+
+    assert [default_batch(1 / fps) for fps in (30, 60, 120, 240)] == [1, 1, 3, 6]
+    assert all((default_batch(1 / fps) - 1) / fps <= 0.025 for fps in (30, 100, 120, 480))
+
+
+def test_client_sends_batches_and_resumes_after_a_dropped_connection(model, capsys):
+    from websockets.asyncio.server import serve
+
+    from analysis.online.remote import stream_to
+
+    motion = read(DATA / "reps/m07_s01_e02.bvh.gz")
+    session, connections, kinds = LiveSession(model), [], []
+
+    async def handler(ws) -> None:
+        connections.append(ws)
+        async for raw in ws:
+            message = json.loads(raw)
+            kinds.append(message["type"])
+            events = session.handle(message)
+            if message["type"] == "frames" and events:
+                await ws.send(json.dumps(events))  # a batch's events in one message
+            else:
+                for event in events:
+                    await ws.send(json.dumps(event))
+            if len(connections) == 1 and session.next_seq >= 30:
+                await ws.close()
+                return
+
+    async def run() -> dict:
+        async with serve(handler, "127.0.0.1", 0) as server:
+            port = server.sockets[0].getsockname()[1]
+            source = Source(header_text(motion), motion.frame_time, iter(motion.frames))
+            return await stream_to(f"ws://127.0.0.1:{port}/", "token", source, batch=4)
+
+    summary = asyncio.run(run())
+    assert len(connections) == 2 and kinds.count("frames") >= motion.n_frames // 4 - 2
+    assert summary["frames"] == motion.n_frames
+    assert np.array_equal(np.vstack(session.frames), motion.frames)
+    printed = events_of(capsys.readouterr().out)
+    frames = [e["frame"] for e in printed if e["event"] == "position"]
+    assert frames == sorted(set(frames))  # each position once, in order

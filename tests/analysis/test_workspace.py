@@ -153,3 +153,21 @@ def test_a_squat_that_moves_the_arms_is_not_an_arm_exercise():
              "LeftLowerLeg", "LeftFoot", "RightUpperLeg", "RightLowerLeg", "RightFoot"]  # fmt: skip
     assert not involves_arms(squat)
     assert involves_arms(["RightCollar", "RightUpperArm", "RightForearm", "RightHand"])
+
+
+def test_hull_and_area_from_trimesh_on_a_dense_cap():
+    """The patch is trimesh's convex hull of the shoulder and the hand's directions, less the
+    faces at the shoulder; its flat facets' area (trimesh) and its solid angle both give the
+    cap's area within 5 %."""
+    import trimesh
+
+    points = cap(np.array([1.0, 0.0, 0.0]), 60.0, n_rings=24, n_around=180)
+    ws = workspace_from_points(points, "right")
+    hull = trimesh.convex.convex_hull(np.vstack((np.zeros((1, 3)), points)))
+    at_shoulder = np.linalg.norm(hull.vertices, axis=1) < 1e-6
+    away = ~at_shoulder[hull.faces].any(axis=1)
+    patch = trimesh.Trimesh(hull.vertices, hull.faces[away], process=False)
+    assert len(ws.faces) == int(away.sum())
+    assert ws.relative_area == pytest.approx(cap_share(60.0), rel=0.01)
+    assert patch.area / (2 * np.pi) == pytest.approx(cap_share(60.0), rel=0.05)
+    assert patch.area / (2 * np.pi) < ws.relative_area  # chords lie inside the sphere

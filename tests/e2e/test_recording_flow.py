@@ -49,7 +49,8 @@ def test_upload_play_jump_and_download_report(page, live_server, demo):
     target = int(landmark.get_attribute("data-frame"))
     landmark.click()
     assert page.evaluate("window.physioPlayback.frame") == target
-    assert page.inner_text("#frame-label").startswith(f"frame {target} ")
+    fps = page.evaluate("window.physioPlayback.meta.fps")
+    assert page.inner_text("#frame-label") == f"{target / fps:.2f} s"  # seconds, not frames
 
     page.select_option("#speed", "0.25")  # slow, so the jump back is seen before it plays on
     page.evaluate(f"window.physioPlayback.setFrame({target + 8})")

@@ -278,3 +278,36 @@ def test_api_refuses_other_clinics_and_bad_input(world, exercise_with_model):
     assert client.post(url, other).status_code == 404
     assert client.post(url, {"patient": "x", "exercise": "y"}).status_code == 400
     assert APIClient().post(url, other).status_code == 401
+
+
+def test_bad_headers_binary_and_oversized_messages_are_answered(
+    world, exercise_with_model, short_recording
+):
+    """None of these ends the connection: a good start and frame still work afterwards."""
+    key, created = create_session(world.therapist, world.patient, exercise_with_model)
+    motion = read(short_recording)
+
+    async def run() -> tuple[list[dict], dict]:
+        comm = communicator(created["ws"], key)
+        await comm.connect()
+        answers = []
+        for message in ({"type": "start", "header": "HIERARCHY\nnonsense"},
+                        {"type": "start"}):  # fmt: skip
+            await comm.send_json_to(message)
+            answers.append(await comm.receive_json_from(timeout=10))
+        await comm.send_to(bytes_data=b"\x00\x01binary")
+        answers.append(await comm.receive_json_from(timeout=10))
+        await comm.send_to(text_data="x" * (2 << 20))
+        answers.append(await comm.receive_json_from(timeout=10))
+        await comm.send_json_to({"type": "start", "header": header_text(motion)})
+        assert (await comm.receive_json_from(timeout=30))["event"] == "ready"
+        await comm.send_json_to({"type": "frame", "seq": 0, "values": motion.frames[0].tolist()})
+        position = (await until(comm, "position"))[-1]
+        await comm.disconnect()
+        return answers, position
+
+    answers, position = async_to_sync(run)()
+    assert [a["code"] for a in answers] == ["bad-header", "bad-header", "bad-message",
+                                            "bad-message"]  # fmt: skip
+    assert all(a["event"] == "error" and a["message"] for a in answers)
+    assert position["frame"] == 0

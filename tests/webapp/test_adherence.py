@@ -69,7 +69,7 @@ def test_adherence_on_the_page_and_in_the_api(client, world):
     recorded(world.patient, exercise, 0, "reps/m01_s01_e01.bvh.gz")
     client.force_login(world.therapist)
     page = client.get(reverse("patients:detail", kwargs={"pk": world.patient.pk}))
-    assert "1 of 1 sessions done (100%)" in page.content.decode()
+    assert "1 of 1 session done (100%)" in page.content.decode()
     api = APIClient()
     api.force_authenticate(world.patient_user)
     body = api.get(f"/api/v1/patients/{world.patient.pk}/prescriptions/").json()

@@ -8,8 +8,10 @@ import json
 import pytest
 from django.urls import reverse
 
-from analysis.feedback import default_grammar
+from analysis.feedback import Grammar, default_grammar
 from tests.personas import make_exercise
+from webapp.exercises.annotate import kept_type_names
+from webapp.exercises.annotate_data import grammar_names
 from webapp.exercises.models import Exercise
 
 
@@ -58,7 +60,8 @@ def test_saving_key_poses(client, world, exercise):
     exercise.refresh_from_db()
     assert exercise.tutor_landmark_frames == [0, 40, 72]
     assert exercise.tutor_landmark_types == [1, 2, 1]
-    assert exercise.landmark_type_names == {"1": "key pose 1", "2": "deepest"}
+    # The posted name wins; kind 1 keeps the name it had.
+    assert exercise.landmark_type_names == {"1": "start", "2": "deepest"}
     assert exercise.involved_joints == [knee]
 
 
@@ -108,3 +111,51 @@ def test_annotation_page_links_its_data(client, world, exercise):
     assert "js/annotate.js" in page
     detail = client.get(url("detail", exercise)).content.decode()
     assert url("annotate", exercise) in detail
+
+
+def test_tutor_data_names_body_parts_orders_them_by_movement_and_has_the_pose(
+    client, world, exercise
+):
+    client.force_login(world.therapist)
+    body = client.get(url("tutor-data", exercise)).json()
+    joints, labels = body["joints"], body["labels"]
+    assert labels["LeftLowerLeg"] == "left lower leg" and labels["LeftUpperLeg"] == "left thigh"
+    assert not set(labels.values()) & set(joints), "no rig joint name is shown"
+    order = body["movement_order"]
+    assert sorted(order) == sorted(joints) and order[-1] == joints[0], "the root comes last"
+    spread = [max(body["angles_deg"][j]) - min(body["angles_deg"][j]) for j in order[:-1]]
+    assert spread == sorted(spread, reverse=True) and spread[0] > 20
+    pose = body["pose"]
+    assert len(pose["parents"]) == len(joints) and pose["parents"][0] == -1
+    assert len(pose["positions"]) == body["n_frames"] * len(joints) * 3
+
+
+def test_kept_type_names():
+    assert kept_type_names({"2": " deepest "}, {"1": "begin", "2": "old"}, [1, 2, 1]) == {
+        "1": "begin",
+        "2": "deepest",
+    }
+    # Kind 1 is "start" when nobody named it; other unnamed kinds stay unnamed.
+    assert kept_type_names({}, {}, [1, 3]) == {"1": "start"}
+    # A name typed for a kind with no key pose marked is not stored.
+    assert kept_type_names({"5": "x"}, {}, [1]) == {"1": "start"}
+
+
+def test_grammar_names_are_plain_unless_two_joints_read_the_same():
+    names = grammar_names(("Hips", "LeftUpLeg", "LeftUpperLeg", "RightKnee"))
+    assert names["RightKnee"] == "right_knee"
+    assert names["LeftUpLeg"] == "LeftUpLeg" and names["LeftUpperLeg"] == "LeftUpperLeg"
+
+
+def test_page_fills_the_default_grammar_until_one_is_saved(client, world, exercise):
+    client.force_login(world.therapist)
+    page = client.get(url("annotate", exercise))
+    text = page.context["grammar"]
+    assert page.context["grammar_is_default"] is True and Grammar.parse(text).rules
+    assert "grammar-guide" in page.content.decode()
+    joints = exercise.tutor_motion().skeleton.names
+    assert not any(f"@{name}$" in text for name in joints), "body parts in plain words"
+    Exercise.objects.filter(pk=exercise.pk).update(feedback_grammar='type$1 -> F:"Well done"')
+    again = client.get(url("annotate", exercise))
+    assert again.context["grammar"] == 'type$1 -> F:"Well done"'
+    assert again.context["grammar_is_default"] is False

@@ -12,7 +12,7 @@ def test_demo_clinic_loads_once(client):
     call_command("load_demo")
     call_command("load_demo")  # idempotent: nothing created or analysed twice
     assert Clinic.objects.filter(name="Demo clinic").count() == 1
-    assert User.objects.filter(username__startswith="demo-").count() == 2
+    assert User.objects.filter(username__startswith="demo-").count() == 3
     assert Patient.objects.count() == 2
     exercises = Exercise.objects.all()
     assert exercises.count() == 3
@@ -24,6 +24,7 @@ def test_demo_clinic_loads_once(client):
     # The published demo passwords work (one load is slow enough: the same test checks them).
     assert client.login(username="demo-therapist", password="demo-therapist-pw")
     assert client.login(username="demo-patient", password="demo-patient-pw")
+    assert client.login(username="demo-admin", password="demo-admin-pw")
 
 
 @pytest.mark.django_db

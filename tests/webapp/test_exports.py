@@ -1,16 +1,25 @@
-"""History exports: CSV rows per recording and the FHIR R4 Bundle (validated with fhir.resources),
-with the API's access rules (another clinic's patient: 404; anonymous: 401)."""
+"""History exports: CSV rows per recording (read back with the csv module and with pandas) and the
+FHIR R4 Bundle, validated twice: with the `fhir.resources` models of the R4 line (R4B, 4.3.0;
+the package's pure 4.0.1 models ended with its pydantic-1 releases) and with the strict FHIR
+4.0.1 (R4) models of `fhirclient`; and the API's access rules (another clinic's patient: 404;
+anonymous: 401)."""
 
 from __future__ import annotations
 
 import csv
 import datetime
 import io
+import re
+from pathlib import Path
 
+import pandas as pd
 import pytest
 from django.urls import reverse
 from django.utils import timezone
 from fhir.resources.R4B.bundle import Bundle
+from fhirclient.models.bundle import Bundle as R4Bundle
+from fhirclient.models.observation import Observation as R4Observation
+from fhirclient.models.patient import Patient as R4Patient
 from rest_framework.test import APIClient
 
 from analysis.clinical import ANGLE_NAMES
@@ -86,6 +95,25 @@ def test_history_csv_one_row_per_analysed_recording(world, history):
     assert AuditEvent.objects.filter(action="export", patient_id=world.patient.pk).exists()
 
 
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "sections" / "clinical.md"
+
+
+def test_history_csv_opens_in_pandas_with_the_documented_columns(world, history):
+    documented = re.search(r"oldest first: `([^`]+)`", DOCS.read_text().replace("\n  ", " "))
+    assert documented is not None
+    leading = [c.strip() for c in documented.group(1).split(",")]
+    url = reverse("api-patient-history-csv", kwargs={"pk": world.patient.pk})
+    frame = pd.read_csv(io.BytesIO(api(world.therapist).get(url).content))
+    assert list(frame.columns) == [*leading, *(f"{name}_range" for name in ANGLE_NAMES)]
+    assert len(frame) == 2  # the two analysed recordings; the one not analysed yet is left out
+    assert pd.to_datetime(frame["date"]).is_monotonic_increasing
+    assert frame["score"].tolist() == [61.5, 80.0]
+    assert frame["repetitions"].tolist() == [3, 3] and frame["passed"].tolist() == [2, 2]
+    assert frame["knee_flexion_left_range"].isna().tolist() == [True, False]
+    assert frame["knee_flexion_left_range"].iloc[1] == KNEE.range
+    assert frame[[f"{name}_range" for name in ANGLE_NAMES]].iloc[0].isna().all()
+
+
 def test_history_csv_for_a_patient_and_asking_for_csv(world, history):
     url = reverse("api-patient-history-csv", kwargs={"pk": world.patient.pk})
     client = APIClient()
@@ -102,6 +130,10 @@ def test_fhir_bundle_validates_and_holds_the_history(world, history):
     data = response.json()
     bundle = Bundle.model_validate(data)  # raises on anything FHIR does not allow
     assert bundle.type == "collection"
+    r4 = R4Bundle(data, strict=True)  # FHIR 4.0.1: raises on unknown or mistyped elements
+    assert isinstance(r4.entry[0].resource, R4Patient)
+    assert all(isinstance(e.resource, R4Observation) for e in r4.entry[1:])
+    assert r4.entry[1].resource.valueQuantity.unit and r4.entry[1].resource.status == "final"
     resources = [e["resource"] for e in data["entry"]]
     patient = resources[0]
     assert patient["resourceType"] == "Patient" and patient["id"] == str(world.patient.pk)
@@ -139,5 +171,6 @@ def test_empty_history(world):
     data = api(world.therapist).get(url).json()
     assert [e["resource"]["resourceType"] for e in data["entry"]] == ["Patient"]
     Bundle.model_validate(data)
+    R4Bundle(data, strict=True)
     csv_url = reverse("api-patient-history-csv", kwargs={"pk": world.other_patient.pk})
     assert rows_of(api(world.therapist).get(csv_url)) == []

@@ -13,7 +13,9 @@ from django.db.models import Count
 from django.test.utils import CaptureQueriesContext
 
 from webapp.accounts.models import Clinic, User
+from webapp.dashboard.models import ProgressPoint
 from webapp.patients.models import Patient
+from webapp.patients.progress_store import store_points
 from webapp.recordings.models import AnalysisRun
 
 CLINIC = "Query-count clinic"
@@ -60,6 +62,28 @@ def test_fill_makes_the_clinic_asked_for(clinic):
     summary = runs.filter(status="succeeded").first().summary
     assert 0 <= summary["score"] <= 100
     assert len(summary["repetitions"]) == summary["repetition_count"]
+
+
+def test_fill_stores_every_succeeded_runs_progress_point_as_a_worker_would(clinic):
+    succeeded = AnalysisRun.objects.filter(recording__clinic=clinic, status="succeeded")
+    filled = {p.run_id: p for p in ProgressPoint.objects.filter(run__recording__clinic=clinic)}
+    assert len(filled) == succeeded.count() > 0
+    ProgressPoint.objects.all().delete()
+    from_summaries = store_points(succeeded.values_list("pk", flat=True))  # read back, rendered
+    fields = ("page", "api", "joints", "clinical")
+    for run_id, point in from_summaries.items():
+        assert [getattr(point, f) for f in fields] == [getattr(filled[run_id], f) for f in fields]
+
+
+def test_progress_answers_never_read_a_summary(therapist_client, clinic):
+    """The long history's progress comes from the stored points: no run's summary is read."""
+    _, many = patients_by_runs(clinic)
+    for page in ("/patients/{id}/progress.json", "/api/v1/patients/{id}/progress/"):
+        with CaptureQueriesContext(connection) as queries:
+            response = therapist_client.get(page.format(id=many.pk))
+        points = response.json()["points"]
+        assert len(points) == many.recordings.filter(runs__status="succeeded").distinct().count()
+        assert not [q["sql"] for q in queries if "summary" in q["sql"]], page
 
 
 # Most SQL queries each page may make (session, user, audit event and the page's own reads),

@@ -47,7 +47,7 @@ def test_page_draws_layers_guidance_and_verdicts_in_seconds(client, world, recor
     for layer in ("identified", "refined", "periodic"):
         assert f'<input type="checkbox" data-layer="{layer}" checked>' in html
         assert f'class="tl-row layer" data-layer="{layer}"' in html
-    assert "key poses as found (1; 7 candidate frames considered)" in html
+    assert "key poses as found (1; 7 candidate moments considered)" in html
     assert '<span style="left:51.282%">1</span>' in html and "time (s)" in html
     assert 'class="landmark identified type-1" data-frame="3"' in html
     assert 'class="landmark refined type-2" data-frame="20"' in html

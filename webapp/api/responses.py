@@ -5,9 +5,13 @@ through untouched; the serializers here describe them, they do not filter them."
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
+from django.http import HttpResponse, HttpResponseBase
 from rest_framework import serializers
+from rest_framework.request import Request
+from rest_framework.response import Response
 
 from webapp.api.numbers import rounded, utc_iso
 from webapp.api.serializers import (
@@ -39,11 +43,14 @@ class ProgressSerializer(serializers.Serializer):
     points = ProgressPointSerializer(many=True)
 
 
-def progress_body(patient_id: Any, points: list[dict[str, Any]]) -> dict[str, Any]:
-    return {
-        "patient": str(patient_id),
-        "points": [{**rounded(p), "date": utc_iso(p.get("date"))} for p in points],
-    }
+def progress_response(request: Request, patient_id: Any, points_json: str) -> HttpResponseBase:
+    """The progress answer around the points' JSON text (`progress_points_json(api=True)`:
+    each point rounded, its date in UTC): sent as it is when JSON is asked for, as thousands of
+    points would take longer to decode and encode again than the whole request otherwise."""
+    body = f'{{"patient": "{patient_id}", "points": {points_json}}}'
+    if request.accepted_renderer.format == "json":
+        return HttpResponse(body, content_type="application/json")
+    return Response(json.loads(body))  # the browsable API
 
 
 class AdherenceSerializer(serializers.Serializer):

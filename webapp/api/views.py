@@ -32,7 +32,7 @@ from webapp.api.serializers import (
 )
 from webapp.api.summaries import recording_summaries
 from webapp.patients.adherence import adherence
-from webapp.patients.progress import patient_progress
+from webapp.patients.progress import progress_points_json
 from webapp.recordings import services
 from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import UploadForm
@@ -116,13 +116,14 @@ class PatientProgress(APIView):
     @extend_schema(parameters=DATE_FILTERS, responses={200: responses.ProgressSerializer})
     def get(self, request: Request, pk) -> Response:
         patient = get_patient_for_user(request, pk)
-        points = patient_progress(
+        points, _ = progress_points_json(
             patient,
             exercise_id=request.query_params.get("exercise"),
             since=date_param(request, "since"),
             until=date_param(request, "until"),
+            api=True,
         )
-        return Response(responses.progress_body(patient.pk, points))
+        return responses.progress_response(request, patient.pk, points)
 
 
 class ExerciseList(generics.ListAPIView):

@@ -1,6 +1,6 @@
 """Which of a clinic's patients need a therapist's attention, and why.
 
-Three signals, each one query over the clinic (never one query per patient):
+Four signals, each one query over the clinic (never one query per patient):
 
 - a failed analysis: the newest run of a recent recording failed (the patient or the file may
   need help before the next session);
@@ -8,7 +8,9 @@ Three signals, each one query over the clinic (never one query per patient):
   scores before it; a window function picks the newest four runs per patient and exercise,
   the comparison is made here;
 - missed sessions: fewer than half the sessions a prescription asks for were done over the last
-  two weeks (sessions counted as in `webapp.patients.adherence`: days with a recording).
+  two weeks (sessions counted as in `webapp.patients.adherence`: days with a recording);
+- pain: a recording of the last two weeks came with a pain score of PAIN_ATTENTION (6/10) or
+  more (the newest such recording per patient).
 
 Archived and deleted patients are left out: nobody is treating them.
 
@@ -47,12 +49,14 @@ SCORE_DROP = 10.0  # points (scores are 0–100)
 ADHERENCE_WINDOW_DAYS = 14
 ADHERENCE_MIN_PERCENT = 50.0
 NEWEST_FIRST = (F("recording__uploaded_at").desc(), F("created_at").desc())
+PAIN_ATTENTION = 6  # of 10: from here on a therapist looks before the next session
+PAIN_WITHIN_DAYS = 14
 ROWS_PER_SIGNAL = 500  # caps each query; a clinic with more flags has bigger problems
 
 
 @dataclass(frozen=True)
 class Reason:
-    kind: str  # "failed" | "falling" | "adherence"
+    kind: str  # "failed" | "falling" | "adherence" | "pain"
     text: str
     urgency: float  # higher first
     recording_id: Any = None  # the recording to open, when there is one
@@ -214,6 +218,33 @@ def missed_sessions(
     return found
 
 
+def reported_pain(
+    clinic_id: Any, now: datetime.datetime, patient_id: Any = None
+) -> list[tuple[Any, Reason]]:
+    """The newest recording per patient of the last PAIN_WITHIN_DAYS days with a pain score of
+    PAIN_ATTENTION or more; the worse the pain, the more urgent (between falling and failed)."""
+    recordings = Recording.objects.filter(
+        clinic_id=clinic_id,
+        patient__archived_at__isnull=True,
+        pain_score__gte=PAIN_ATTENTION,
+        uploaded_at__gte=now - _days(PAIN_WITHIN_DAYS),
+    )
+    if patient_id is not None:
+        recordings = recordings.filter(patient_id=patient_id)
+    rows = recordings.order_by("-uploaded_at").values(
+        "pk", "patient_id", "pain_score", "exercise__name", "uploaded_at"
+    )
+    found: dict[Any, Reason] = {}
+    for row in rows[:ROWS_PER_SIGNAL]:
+        if row["patient_id"] in found:
+            continue  # the newest painful session speaks for the patient
+        day = timezone.localtime(row["uploaded_at"]).strftime("%-d %b")
+        exercise = row["exercise__name"] or "a session"
+        text = f"{exercise}: pain {row['pain_score']}/10 reported on {day}"
+        found[row["patient_id"]] = Reason("pain", text, 250.0 + 5 * row["pain_score"], row["pk"])
+    return list(found.items())
+
+
 def session_days(
     clinic_id: Any, first: datetime.date, last: datetime.date, patient_id: Any = None
 ) -> dict[tuple[Any, Any], int]:
@@ -237,7 +268,7 @@ def session_days(
 def patients_needing_attention(
     clinic_id: Any, now: datetime.datetime | None = None, patient_id: Any = None
 ) -> list[Attention]:
-    """Patients with at least one reason, the most urgent first (three queries in all).
+    """Patients with at least one reason, the most urgent first (four queries in all).
 
     Computed from the runs, recordings and prescriptions; the home page reads the stored copy
     (`webapp.dashboard.precompute`). `patient_id`: that patient only (the update after a run).
@@ -248,6 +279,7 @@ def patients_needing_attention(
     found = failed_analyses(clinic_id, now, patient_id)
     found += falling_scores(clinic_id, now, patient_id)
     found += missed_sessions(clinic_id, timezone.localdate(now), patient_id)
+    found += reported_pain(clinic_id, now, patient_id)
     by_patient: dict[Any, Attention] = {}
     for flagged, reason in found:
         by_patient.setdefault(flagged, Attention(flagged)).reasons.append(reason)

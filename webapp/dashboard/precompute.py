@@ -1,7 +1,8 @@
 """Keeping the stored attention list (`PatientAttention`) up to date.
 
 - `refresh_patient`: after a run of the patient succeeds or fails (`workers.runs`), three small
-  queries over that one patient's rows, then one write;
+  queries over that one patient's rows, then one write (`refresh_after_run` also stores the
+  run's progress point, `webapp.patients.progress_store`);
 - `refresh_clinic` / `refresh_all`: beat (`workers.tasks.refresh_attention`), for what changes
   with time alone (a failure older than two weeks, sessions missed), and after a bulk load.
 
@@ -60,9 +61,18 @@ def refresh_patient(patient_id: Any, clinic_id: Any) -> bool:
 
 
 def refresh_after_run(run_id: Any) -> None:
-    """The update on write: never lets a problem here fail the run that triggered it."""
+    """The update on write: never lets a problem here fail the run that triggered it.
+
+    Also stores the run's progress point when it succeeded (`webapp.patients.progress_store`).
+    """
+    from webapp.patients.progress_store import store_after_run
     from webapp.recordings.models import AnalysisRun
 
+    try:
+        with transaction.atomic():
+            store_after_run(run_id)
+    except Exception:  # the next read of the patient's progress stores it
+        log.exception("progress point not stored after run %s", run_id)
     try:
         with transaction.atomic():
             row = (

@@ -1,5 +1,5 @@
-"""The demo clinic: a therapist, two patients (one with an account), three exercises with UI-PRMD
-tutors and built models, and a few analysed UI-PRMD recordings per patient.
+"""The demo clinic: a therapist, a clinic admin, two patients (one with an account), three exercises
+with UI-PRMD tutors and built models, and a few analysed UI-PRMD recordings per patient.
 
 Idempotent: loading twice keeps existing rows and never duplicates them.
 """
@@ -104,6 +104,8 @@ def load_demo_clinic() -> Clinic:
     therapist = ensure_user(
         "demo-therapist", "demo-therapist-pw", clinic, Role.THERAPIST, "Dana Therapist"
     )
+    # The clinic admin reads the audit log and manages every token of the clinic.
+    ensure_user("demo-admin", "demo-admin-pw", clinic, Role.CLINIC_ADMIN, "Alex Admin")
     patient_user = ensure_user(
         "demo-patient", "demo-patient-pw", clinic, Role.PATIENT, "Pat Patient"
     )

@@ -1,9 +1,10 @@
 """Data and edits behind the tutor's key-pose annotation and grammar editing (JSON endpoints).
 
 `tutor_data` gives the tutor's joint-angle curves (the rotation angle of every joint's local
-rotation, degrees per frame) with the marked key poses and the key poses the system suggests (rest
-and extreme poses), for the annotation page to draw; the page posts the edited key poses to
-`save_landmarks`. `check_grammar` validates feedback-grammar text as
+rotation, degrees per frame), the joints' anatomical names and their order by movement, the
+tutor's positions for the 3D view, the marked key poses and the key poses the system suggests (rest
+and extreme poses), for the annotation page to draw; the page posts the edited key poses and the
+names typed for their kinds to `save_landmarks`. `check_grammar` validates feedback-grammar text as
 the therapist types (line and column of the first error) and saves it when asked.
 """
 
@@ -11,34 +12,45 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 from django.contrib.auth.decorators import login_required
 from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import render
 from django.views.decorators.http import require_POST
 
 from analysis.feedback import Grammar, GrammarError
-from analysis.kinematics import rotations
 from analysis.landmarks import suggest_key_poses
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
+from webapp.exercises.annotate_data import (
+    angle_curves,
+    default_grammar_text,
+    grammar_has_findings,
+    movement_order,
+    plain_labels,
+    tutor_pose,
+)
 from webapp.exercises.forms import LandmarksForm
 from webapp.exercises.models import Exercise
 
-
-def angle_curves(motion) -> dict[str, list[float]]:
-    """Per joint, the angle (deg) of its local rotation in every frame, rounded to 0.1°."""
-    quats = rotations(motion)  # (F, J, 4) unit quaternions w, x, y, z
-    angles = np.degrees(2.0 * np.arccos(np.clip(np.abs(quats[..., 0]), 0.0, 1.0)))
-    return {
-        name: np.round(angles[:, j], 1).tolist() for j, name in enumerate(motion.skeleton.names)
-    }
+__all__ = ["angle_curves", "annotate_page", "check_grammar", "save_landmarks", "tutor_data"]
 
 
 @login_required
 @require_staff
 def annotate_page(request: HttpRequest, pk) -> HttpResponse:
+    """The page; an exercise with no grammar yet shows the one it would be given."""
     exercise = get_exercise_for_user(request, pk)
-    return render(request, "exercises/annotate.html", {"exercise": exercise})
+    grammar, is_default = exercise.feedback_grammar, False
+    if not grammar.strip():
+        motion = exercise.tutor_motion()
+        order = movement_order(angle_curves(motion), tuple(motion.skeleton.names))
+        grammar, is_default = default_grammar_text(exercise, motion, order), True
+    context = {
+        "exercise": exercise,
+        "grammar": grammar,
+        "grammar_is_default": is_default,
+        "findings": grammar_has_findings(),
+    }
+    return render(request, "exercises/annotate.html", context)
 
 
 @login_required
@@ -47,12 +59,17 @@ def tutor_data(request: HttpRequest, pk) -> JsonResponse:
     exercise = get_exercise_for_user(request, pk)
     motion = exercise.tutor_motion()
     suggestion = suggest_key_poses(motion)
+    curves = angle_curves(motion)
     return JsonResponse(
         {
             "fps": motion.fps,
             "n_frames": int(motion.frames.shape[0]),
             "joints": list(motion.skeleton.names),
-            "angles_deg": angle_curves(motion),
+            # Anatomical names for the page: rig joint names are never shown.
+            "labels": plain_labels(motion),
+            "movement_order": movement_order(curves, tuple(motion.skeleton.names)),
+            "angles_deg": curves,
+            "pose": tutor_pose(motion),
             "landmark_frames": exercise.tutor_landmark_frames,
             "landmark_types": exercise.tutor_landmark_types,
             "type_names": exercise.landmark_type_names,
@@ -77,13 +94,24 @@ def save_landmarks(request: HttpRequest, pk) -> JsonResponse:
     data = form.cleaned_data
     exercise.tutor_landmark_frames = data["frames_list"]
     exercise.tutor_landmark_types = data["types_list"]
-    names = data.get("type_names") or {}
-    exercise.landmark_type_names = {
-        str(t): str(names.get(str(t)) or f"key pose {t}") for t in sorted(set(data["types_list"]))
-    }
+    exercise.landmark_type_names = kept_type_names(
+        data.get("type_names") or {}, exercise.landmark_type_names, data["types_list"]
+    )
     exercise.involved_joints = data.get("involved_joints") or []
     exercise.save()
     return JsonResponse({"saved": True, "landmark_frames": exercise.tutor_landmark_frames})
+
+
+def kept_type_names(posted: dict, earlier: dict, types: list[int]) -> dict[str, str]:
+    """The name of every kind of key pose marked: the one typed in, else the one it had, else
+    "start" for kind 1 (others stay unnamed: pages describe them by their place)."""
+    names = {}
+    for kind in sorted(set(types)):
+        typed = str((posted or {}).get(str(kind)) or "").strip()[:60]
+        name = typed or str((earlier or {}).get(str(kind)) or "") or ("start" if kind == 1 else "")
+        if name:
+            names[str(kind)] = name
+    return names
 
 
 def grammar_verdict(text: str) -> dict:

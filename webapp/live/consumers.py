@@ -9,6 +9,16 @@ A replay session streams its stored recording from the server through the same p
 Per session, the aligner state lives in this process (`SESSIONS`), so a capture client that
 reconnects resumes where it stopped; with several server processes, route a session's
 connections to one process (sticky sessions).
+
+Events are broadcast to the group only while someone else watches the session: a connection of
+the same session in this process (`CONNECTIONS`), or one in another process that said hello
+through the channel layer. A capture client alone costs no channel-layer traffic (with Redis,
+a round trip per event), which is most of what a server spends per frame besides the aligner.
+
+A batch of frames (``{"type": "frames", ...}``, `analysis.online.session`) is answered with one
+message, a JSON array of its events (none when it has none): the per-message cost of Daphne and
+Channels, most of a frame's cost, is paid once per batch. JSON is read and written with orjson
+when it is installed (a few times faster than the standard library on frames of numbers).
 """
 
 from __future__ import annotations
@@ -30,8 +40,14 @@ from webapp.live import services
 from webapp.live.auth import scope_user
 from webapp.live.models import LiveSession, LiveStatus
 
+try:
+    import orjson
+except ImportError:  # optional: the standard library does the same, slower
+    orjson = None
+
 log = logging.getLogger(__name__)
 SESSIONS: dict[str, SessionState] = {}
+CONNECTIONS: dict[str, int] = {}  # open connections per session in this process
 MAX_MESSAGE_BYTES = 1 << 20
 REFUSED = 4403
 REPLAY_SPEED = 1.0  # times real time
@@ -44,6 +60,7 @@ def _error(code: str, message: str) -> dict[str, Any]:
 class LiveConsumer(AsyncWebsocketConsumer):
     live: LiveSession
     replay: asyncio.Task[None] | None = None
+    heard_other = False  # a connection of this session in another process said hello
 
     async def connect(self) -> None:
         session_id = str(self.scope["url_route"]["kwargs"]["session_id"])
@@ -60,6 +77,10 @@ class LiveConsumer(AsyncWebsocketConsumer):
         self.group = f"live-{self.key}"
         await self.channel_layer.group_add(self.group, self.channel_name)
         await self.accept()
+        CONNECTIONS[self.key] = CONNECTIONS.get(self.key, 0) + 1
+        await self.channel_layer.group_send(
+            self.group, {"type": "live.hello", "origin": self.channel_name, "answer": True}
+        )
         state = SESSIONS.get(self.key)
         if state is not None:
             await self.send_json(state.ready())
@@ -71,6 +92,11 @@ class LiveConsumer(AsyncWebsocketConsumer):
     async def disconnect(self, code: int) -> None:
         if hasattr(self, "group"):
             await self.channel_layer.group_discard(self.group, self.channel_name)
+            left = CONNECTIONS.get(self.key, 1) - 1
+            if left > 0:
+                CONNECTIONS[self.key] = left
+            else:
+                CONNECTIONS.pop(self.key, None)
         if self.replay is not None:
             self.replay.cancel()
 
@@ -80,7 +106,7 @@ class LiveConsumer(AsyncWebsocketConsumer):
             await self.send_json(_error("bad-message", "send JSON text messages under 1 MB"))
             return
         try:
-            message = json.loads(text_data)
+            message = _loads(text_data)
         except ValueError:
             await self.send_json(_error("bad-json", "the message is not valid JSON"))
             return
@@ -93,13 +119,20 @@ class LiveConsumer(AsyncWebsocketConsumer):
         except (AnalysisInputError, ValueError) as error:
             await self.send_json(_error("bad-header", " ".join(str(error).split())))
             return
-        for event in state.handle(message):
+        events = state.handle(message)
+        for event in events:
             if event["event"] == "position":
                 event["latency_ms"] = round((time.perf_counter() - received) * 1000.0, 3)
                 state.delivery_ms.append(event["latency_ms"])
             if event["event"] == "summary":
                 await self._finish(state, event)
-            await self.send_json(event)
+        if isinstance(message, dict) and message.get("type") == "frames":
+            if events:
+                await self.send(text_data=_dumps(events))
+        else:
+            for event in events:
+                await self.send_json(event)
+        for event in events:
             await self._broadcast(state, event)
 
     async def _state(self, message: Any) -> SessionState:
@@ -127,7 +160,13 @@ class LiveConsumer(AsyncWebsocketConsumer):
         SESSIONS.pop(self.key, None)
         return closing
 
+    def watched(self) -> bool:
+        """Is another connection of this session open (here, or in another process)?"""
+        return CONNECTIONS.get(self.key, 0) > 1 or self.heard_other
+
     async def _broadcast(self, state: SessionState, event: dict[str, Any]) -> None:
+        if not self.watched():
+            return
         if event["event"] == "position" and state.aligner is not None:
             poses = state.aligner.poses()
             if poses is not None:
@@ -141,8 +180,19 @@ class LiveConsumer(AsyncWebsocketConsumer):
         if message.get("origin") != self.channel_name:
             await self.send_json(message["event"])
 
+    async def live_hello(self, message: dict[str, Any]) -> None:
+        """Another connection joined the session: from now on events are broadcast; it is
+        answered, so that it knows too."""
+        if message.get("origin") == self.channel_name:
+            return
+        self.heard_other = True
+        if message.get("answer"):
+            await self.channel_layer.group_send(
+                self.group, {"type": "live.hello", "origin": self.channel_name, "answer": False}
+            )
+
     async def send_json(self, content: dict[str, Any]) -> None:
-        await self.send(text_data=json.dumps(content, separators=(",", ":")))
+        await self.send(text_data=_dumps(content))
 
     async def _replay(self) -> None:
         """Stream the stored recording at real time through the live path."""
@@ -162,6 +212,21 @@ class LiveConsumer(AsyncWebsocketConsumer):
         except Exception:  # a replay must never take the server down
             log.exception("replay of live session %s failed", self.key)
             await self.send_json(_error("replay-failed", "the replay stopped"))
+
+
+def _loads(text: str) -> Any:
+    if orjson is not None:
+        try:
+            return orjson.loads(text)
+        except orjson.JSONDecodeError:
+            pass  # the standard library also reads NaN and Infinity, which then get their error
+    return json.loads(text)
+
+
+def _dumps(content: Any) -> str:
+    if orjson is not None:
+        return orjson.dumps(content, option=orjson.OPT_SERIALIZE_NUMPY).decode()
+    return json.dumps(content, separators=(",", ":"))
 
 
 def _flat(points: Any) -> list[float]:

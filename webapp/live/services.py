@@ -11,6 +11,7 @@ from django.db.models import QuerySet
 from django.utils import timezone
 
 from analysis.bvh import Motion, read
+from analysis.online.live import rehearse
 from analysis.pipeline import FittedModel
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
@@ -47,11 +48,26 @@ def create_session(
     )  # fmt: skip
 
 
+_LOADED: dict[Any, FittedModel] = {}  # model row id -> the model, in this process
+_LOADED_MAX = 16
+
+
 def exercise_model(exercise: Exercise) -> FittedModel:
-    """The exercise's active model (built now, from the tutor, if it has none yet)."""
+    """The exercise's active model (built now, from the tutor, if it has none yet). A model row
+    never changes once stored, so each is read and unpickled once per process: sessions that
+    start together do not each pay for it."""
     from workers.exercise_models import active_model
 
-    return active_model(exercise)[1]
+    exercise.refresh_from_db(fields=["active_model"])
+    cached = _LOADED.get(exercise.active_model_id)
+    if cached is not None:
+        return cached
+    row, model = active_model(exercise)
+    rehearse(model)  # here, in a worker thread, not while the event loop's frames wait
+    if len(_LOADED) >= _LOADED_MAX:
+        _LOADED.pop(next(iter(_LOADED)))
+    _LOADED[row.pk] = model
+    return model
 
 
 def mark_live(live: LiveSession) -> None:

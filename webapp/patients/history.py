@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 
 from django.contrib.auth.decorators import login_required
 from django.http import HttpRequest, HttpResponse, JsonResponse
@@ -11,22 +12,26 @@ from django.utils.text import slugify
 
 from webapp.accounts.permissions import get_patient_for_user
 from webapp.audit import log
-from webapp.patients.progress import patient_progress
+from webapp.patients.progress import patient_progress, progress_points_json
+from webapp.recordings.words import body_part
 
 CSV_COLUMNS = ["date", "exercise_name", "score", "repetitions", "pain_score", "recording", "run"]
 
 
 @login_required
-def progress_json(request: HttpRequest, pk) -> JsonResponse:
+def progress_json(request: HttpRequest, pk) -> HttpResponse:
     patient = get_patient_for_user(request, pk)
     try:
         since, until = date_arg(request, "since"), date_arg(request, "until")
     except ValueError as error:
         return JsonResponse({"detail": str(error)}, status=400)
-    points = patient_progress(
+    # The stored points' JSON text, joined as it is (thousands of points per patient at most).
+    points, joints = progress_points_json(
         patient, exercise_id=request.GET.get("exercise") or None, since=since, until=until
     )
-    return JsonResponse({"patient": str(patient.pk), "points": points})
+    labels = {joint: body_part(joint) for joint in sorted(joints)}  # the charts' legend words
+    body = f'{{"patient": "{patient.pk}", "points": {points}, "labels": {json.dumps(labels)}}}'
+    return HttpResponse(body, content_type="application/json")
 
 
 def date_arg(request: HttpRequest, name: str):

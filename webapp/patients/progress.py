@@ -1,91 +1,55 @@
-"""Progression of one patient: every succeeded run's headline figures, oldest first.
+"""Progression of one patient: every analysed recording's headline figures, oldest first.
 
-Used by the progress JSON endpoint, the charts and the REST API, so it runs one query and reads
-only the summary keys it needs: the database extracts score, γ, range of motion, the number of
-repetitions, the clinical angle ranges and each hand's reachable area from each summary, and
-the rest of it (assessment, feedback, the workspace hulls: most of its 10–20 kB) never reaches
-Python. With hundreds of runs per patient that is most of the endpoint's time.
+Used by the progress JSON endpoint, the charts, the reports and the REST API. One query reads the
+patient's succeeded runs with their recordings and each run's stored progress point (a small
+row rendered when the run succeeded, `webapp.patients.progress_store`), never the runs' 10–20 kB
+summaries: at thousands of runs per patient, extracting from every summary and encoding every
+point again was most of the endpoints' time. A run without a stored point (written before the
+store existed) gets one on the way, in two more queries.
 """
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
-from django.db.models import Func, IntegerField
-from django.db.models.fields.json import KeyTransform
+from django.db.models import Case, F, TextField, When
 
 from analysis.clinical.labels import REGIONS, angle_label, region_of
-from analysis.pipeline.results import AngleRange
+from webapp.api.numbers import utc_iso
 from webapp.patients.models import Patient
+from webapp.patients.progress_store import store_points
 from webapp.recordings.models import AnalysisRun, RunStatus
 
-
-class JsonArrayLength(Func):
-    """Length of a JSON array (NULL when the key is missing)."""
-
-    function = "JSON_ARRAY_LENGTH"
-    output_field = IntegerField()
-
-    def as_postgresql(self, compiler, connection, **extra_context):
-        return self.as_sql(compiler, connection, function="JSONB_ARRAY_LENGTH", **extra_context)
-
-
-def workspace_area(side: str) -> KeyTransform:
-    """summary.workspace.<side>.relative_area, without reading the hull."""
-    return KeyTransform("relative_area", KeyTransform(side, KeyTransform("workspace", "summary")))
-
-
-POINT_VALUES = {
-    "repetition_count": JsonArrayLength(KeyTransform("repetitions", "summary")),
-    "range_of_motion": KeyTransform("range_of_motion", "summary"),
-    "gamma": KeyTransform("gamma", "summary"),
-    "clinical_angles": KeyTransform("clinical_angles", "summary"),
-    "workspace_left": workspace_area("left"),
-    "workspace_right": workspace_area("right"),
-}
+# What may change after a run (the exercise's name, the pain score) is read from the recording.
 POINT_FIELDS = (
     "pk",
-    "score",  # the run's score column, a copy of the summary's score
     "recording_id",
     "recording__exercise_id",
     "recording__exercise__name",
     "recording__uploaded_at",
     "recording__pain_score",
 )
+STORED = {
+    "page": F("progress_point__page"),
+    "api": F("progress_point__api"),
+    # The page text of clinical points only (the clinical charts leave the others out).
+    "clinical": Case(
+        When(progress_point__clinical=True, then=F("progress_point__page")),
+        default=None,
+        output_field=TextField(),
+    ),
+}
+RUN, RECORDING, EXERCISE, NAME, DATE, PAIN, TEXT, JOINTS, CLINICAL = range(9)
 
 
-def run_point(row: dict[str, Any]) -> dict[str, Any]:
-    exercise = row["recording__exercise_id"]
-    return {
-        "run": str(row["pk"]),
-        "recording": str(row["recording_id"]),
-        "exercise": str(exercise) if exercise else None,
-        "exercise_name": row["recording__exercise__name"] if exercise else None,
-        "date": row["recording__uploaded_at"].isoformat(),
-        "score": row["score"],
-        "repetitions": row["repetition_count"] or 0,
-        "range_of_motion": row["range_of_motion"] or {},
-        "gamma": row["gamma"] or {},
-        "pain_score": row["recording__pain_score"],
-        "clinical_angles": angle_ranges_of(row["clinical_angles"]),
-        "workspace": {
-            side: float(row[f"workspace_{side}"])
-            for side in ("left", "right")
-            if row[f"workspace_{side}"] is not None
-        },
-    }
-
-
-def angle_ranges_of(stored: Any) -> dict[str, dict[str, float]]:
-    """The summary's clinical_angles read through `AngleRange` (min, max, range in degrees)."""
-    if not isinstance(stored, dict):
-        return {}
-    return {str(k): AngleRange.from_json(v).to_json() for k, v in stored.items()}
-
-
-def patient_progress(
-    patient: Patient, exercise_id: str | None = None, since=None, until=None
-) -> list[dict[str, Any]]:
+def latest_runs(
+    patient: Patient, exercise_id: str | None = None, since=None, until=None, text: str = "page"
+) -> list[tuple]:
+    """Rows (POINT_FIELDS, the stored point's `text`, joints, clinical), one per recording with
+    a succeeded run, by its newest succeeded run, ordered by upload. `text`: "page" (as
+    `patient_progress` returns points), "api" (rounded), "clinical" (page, clinical points only).
+    """
     runs = AnalysisRun.objects.filter(
         recording__patient=patient, status=RunStatus.SUCCEEDED
     ).order_by("recording__uploaded_at", "created_at")
@@ -95,10 +59,74 @@ def patient_progress(
         runs = runs.filter(recording__uploaded_at__date__gte=since)
     if until:
         runs = runs.filter(recording__uploaded_at__date__lte=until)
-    latest: dict[Any, dict[str, Any]] = {}
-    for row in runs.values(*POINT_FIELDS, **POINT_VALUES):
-        latest[row["recording_id"]] = row  # a re-analysed recording counts once, by its newest run
-    return [run_point(row) for row in latest.values()]
+    latest: dict[Any, tuple] = {}
+    columns = (STORED[text], "progress_point__joints", "progress_point__clinical")
+    for row in runs.values_list(*POINT_FIELDS, *columns):
+        latest[row[RECORDING]] = row  # a re-analysed recording counts once, by its newest run
+    rows = list(latest.values())
+    missing = [row[RUN] for row in rows if row[JOINTS] is None]  # no stored point
+    if missing:
+        stored = store_points(missing)
+        rows = [row if row[JOINTS] is not None else _with_point(row, stored, text) for row in rows]
+    return rows
+
+
+def _with_point(row: tuple, stored: dict, text: str) -> tuple:
+    point = stored[row[RUN]]
+    clinical = point.page if point.clinical else None
+    texts = {"page": point.page, "api": point.api, "clinical": clinical}
+    return (*row[:TEXT], texts[text], point.joints, point.clinical)
+
+
+def point_of(row: tuple) -> dict[str, Any]:
+    figures = json.loads(row[TEXT])
+    exercise = row[EXERCISE]
+    return {
+        "run": str(row[RUN]),
+        "recording": str(row[RECORDING]),
+        "exercise": str(exercise) if exercise else None,
+        "exercise_name": row[NAME] if exercise else None,
+        "date": row[DATE].isoformat(),
+        "score": figures["score"],
+        "repetitions": figures["repetitions"],
+        "range_of_motion": figures["range_of_motion"],
+        "gamma": figures["gamma"],
+        "pain_score": row[PAIN],
+        "clinical_angles": figures["clinical_angles"],
+        "workspace": figures["workspace"],
+    }
+
+
+def patient_progress(
+    patient: Patient, exercise_id: str | None = None, since=None, until=None
+) -> list[dict[str, Any]]:
+    return [point_of(row) for row in latest_runs(patient, exercise_id, since, until)]
+
+
+def progress_points_json(
+    patient: Patient, exercise_id: str | None = None, since=None, until=None, api: bool = False
+) -> tuple[str, set[str]]:
+    """The JSON text of `patient_progress`'s points (rounded and dated as the API answers them
+    when `api`), joined from the stored texts without decoding them, and the body parts named in
+    the points' range of motion and γ."""
+    rows = latest_runs(patient, exercise_id, since, until, text="api" if api else "page")
+    names: dict[Any, str] = {}
+    joint_lists: set[str] = set()  # most runs of an exercise name the same body parts
+    parts = []
+    for row in rows:
+        exercise = row[EXERCISE]
+        if exercise not in names:
+            names[exercise] = json.dumps(row[NAME] if exercise else None)
+        joint_lists.add(row[JOINTS])
+        date = utc_iso(row[DATE]) if api else row[DATE].isoformat()
+        head = (
+            f'{{"run": "{row[RUN]}", "recording": "{row[RECORDING]}", "exercise": '
+            f'{json.dumps(str(exercise)) if exercise else "null"}, "exercise_name": '
+            f'{names[exercise]}, "date": "{date}", "pain_score": {json.dumps(row[PAIN])}, '
+        )
+        parts.append(head + row[TEXT][1:])
+    joints = {joint for text in joint_lists for joint in json.loads(text)}
+    return "[" + ", ".join(parts) + "]", joints
 
 
 WORKSPACE_LABELS = {"left": "Left hand", "right": "Right hand"}
@@ -142,10 +170,11 @@ def _percent(share: float | None) -> float | None:
 def clinical_progress(patient: Patient) -> list[dict[str, Any]]:
     """Per exercise (never mixing exercises in one series), each clinical angle's range in
     degrees and each hand's reachable area (% of the front hemisphere) over the session dates.
-    One query (`patient_progress`); sessions without clinical measures are left out."""
+    One query (`latest_runs`); sessions without clinical measures are left out, undecoded."""
     by_exercise: dict[str, list[dict[str, Any]]] = {}
-    for point in patient_progress(patient):
-        if point["clinical_angles"] or point["workspace"]:
+    for row in latest_runs(patient, text="clinical"):
+        if row[CLINICAL]:
+            point = point_of(row)
             by_exercise.setdefault(point["exercise_name"] or "Unknown exercise", []).append(point)
     return [
         {"exercise": name, "id": f"clinical-{i}", **_exercise_series(points)}

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 from django.contrib import messages
 from django.contrib.auth.decorators import login_required
-from django.core.paginator import Paginator
+from django.core.paginator import Page, Paginator
 from django.db.models import Prefetch, Q
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import redirect, render
@@ -16,6 +16,7 @@ from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun
 
 PAGE_SIZE = 25
+RECORDINGS_PER_PAGE = 20
 
 
 @login_required
@@ -45,12 +46,27 @@ def patient_detail(request: HttpRequest, pk) -> HttpResponse:
     context = {
         "patient": patient,
         "prescriptions": with_adherence(patient),
-        "recordings": patient.recordings.select_related("exercise").prefetch_related(
-            Prefetch("runs", queryset=AnalysisRun.objects.only("recording", "status"))
-        )[:50],  # the page shows each run's status: never load the summaries (10–20 kB each)
+        "recordings": recordings_page(patient, request.GET.get("recordings_page")),
         "levels": patient.levels.select_related("exercise").order_by("exercise__name", "joint"),
     }
     return render(request, "patients/detail.html", context)
+
+
+def recordings_page(patient: Patient, number) -> Page:
+    """One page of the patient's recordings, newest first, each with its newest run's status and
+    the score of its newest succeeded run (`latest`, `score`): every recording can be opened."""
+    # Status and score columns only: never load the summaries (10–20 kB each).
+    runs = AnalysisRun.objects.only("recording", "status", "score", "progress", "created_at")
+    recordings = patient.recordings.select_related("exercise").prefetch_related(
+        Prefetch("runs", queryset=runs.order_by("-created_at"))
+    )
+    page = Paginator(recordings, RECORDINGS_PER_PAGE).get_page(number)
+    for recording in page.object_list:
+        ordered = list(recording.runs.all())
+        recording.latest = ordered[0] if ordered else None
+        succeeded = recording.latest_succeeded_run()
+        recording.score = succeeded.score if succeeded else None
+    return page
 
 
 @login_required

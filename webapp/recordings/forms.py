@@ -1,8 +1,12 @@
 from __future__ import annotations
 
+from typing import Any
+
 from django import forms
 from django.core.exceptions import ValidationError
 
+from webapp.accounts.models import User
+from webapp.accounts.permissions import visible_exercises, visible_patients
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings.uploads import (
@@ -20,7 +24,9 @@ class UploadForm(forms.Form):
     exercise = forms.ModelChoiceField(
         queryset=Exercise.objects.none(),
         required=False,
-        help_text="Leave empty to let the system recognise the exercise.",
+        help_text=(
+            "Leave empty to let the system recognise the exercise; you confirm its suggestion next."
+        ),
     )
     file = forms.FileField(help_text="A BVH recording (.bvh or .bvh.gz).")
     pain_score = forms.IntegerField(
@@ -30,10 +36,18 @@ class UploadForm(forms.Form):
         widget=forms.Textarea(attrs={"rows": 3}), required=False, max_length=2000
     )
 
-    def __init__(self, *args, patients, exercises, **kwargs):
+    def __init__(self, *args, patients, exercises, own_patient: Patient | None = None, **kwargs):
         super().__init__(*args, **kwargs)
         self.fields["patient"].queryset = patients
         self.fields["exercise"].queryset = exercises
+        # A patient uploads for themselves: no list of patients to pick from.
+        self.own_patient = own_patient
+        if own_patient is not None:
+            del self.fields["patient"]
+            self.fields["exercise"].help_text = (
+                "One of the exercises your therapist prescribed; leave empty to let the system "
+                "recognise it."
+            )
         self.parsed: ParsedUpload | None = None
 
     def clean_file(self):
@@ -43,6 +57,8 @@ class UploadForm(forms.Form):
 
     def clean(self):
         cleaned = super().clean()
+        if self.own_patient is not None:
+            cleaned["patient"] = self.own_patient
         patient, exercise = cleaned.get("patient"), cleaned.get("exercise")
         if self.parsed is None or patient is None:
             return cleaned
@@ -57,3 +73,18 @@ class UploadForm(forms.Form):
             # it now. The form is a reference cycle, freed only when the cyclic collector runs.
             self.parsed = None
         return cleaned
+
+
+def upload_choices(user: User) -> dict[str, Any]:
+    """The UploadForm arguments for this user: staff pick any active patient of the clinic and any
+    active exercise; a patient uploads for themselves only, one of the exercises prescribed to
+    them (`own_patient`)."""
+    patients = visible_patients(user).filter(archived_at__isnull=True)
+    exercises = visible_exercises(user).filter(archived_at__isnull=True)
+    if not user.is_patient:
+        return {"patients": patients, "exercises": exercises}
+    own = patients.first()
+    if own is None:
+        return {"patients": patients, "exercises": exercises.none(), "own_patient": None}
+    prescribed = exercises.filter(prescriptions__patient=own).distinct()
+    return {"patients": patients, "exercises": prescribed, "own_patient": own}

@@ -9,27 +9,26 @@ from __future__ import annotations
 
 from typing import Any
 
+from analysis.assessment.scoring import PASS_SCORE
 from analysis.pipeline import AnalysisSummary
 from analysis.pipeline.results import assessment_to_json
 from webapp.accounts.models import User
 from webapp.recordings import similar
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
+from webapp.recordings.words import key_pose_name
 
 
 def named_assessment(result: AnalysisSummary, names: dict[str, str]) -> list[dict[str, Any]]:
     return [
-        {**assessment_to_json(item), "type_name": names.get(str(item.type), f"pose {item.type}")}
+        {**assessment_to_json(item), "type_name": key_pose_name(item.type, names)}
         for item in result.assessment
     ]
 
 
-def with_verdicts(result: AnalysisSummary, recording: Recording) -> list[dict[str, Any]]:
-    """Each repetition with `passed` by the exercise's 001 threshold (None until one is fitted)."""
-    threshold = recording.exercise.pass_threshold if recording.exercise else None
-    return [
-        {**rep.to_json(), "passed": None if threshold is None else rep.score >= threshold}
-        for rep in result.repetitions
-    ]
+def with_verdicts(result: AnalysisSummary) -> list[dict[str, Any]]:
+    """Each repetition with `passed` by the one threshold (`PASS_SCORE`, 70 on every exercise:
+    therapist verdicts train the model, they do not move the threshold)."""
+    return [{**rep.to_json(), "passed": rep.score >= PASS_SCORE} for rep in result.repetitions]
 
 
 def metrics(result: AnalysisSummary) -> dict[str, Any]:
@@ -58,8 +57,8 @@ def result_data(recording: Recording, run: AnalysisRun | None, user: User) -> di
     body.update(
         model_version=run.model.version if run.model_id else None,
         code_version=run.code_version,
-        repetitions=with_verdicts(result, recording),
-        pass_threshold=recording.exercise.pass_threshold if recording.exercise else None,
+        repetitions=with_verdicts(result),
+        pass_threshold=PASS_SCORE,
         landmarks=[mark.to_json() for mark in result.landmarks],
         assessment=named_assessment(result, names),
         feedback=[comment.to_dict() for comment in result.feedback],

@@ -25,6 +25,7 @@ from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings import services
 from webapp.recordings.models import AnalysisRun, Recording
+from webapp.recordings.words import file_problem
 
 log = logging.getLogger(__name__)
 MIN_FRAMES = 10
@@ -78,7 +79,8 @@ def parse_upload(upload: UploadedFile) -> ParsedUpload:
             max_values=getattr(settings, "MAX_UPLOAD_FRAME_VALUES", MAX_FRAME_VALUES),
         )
     except (BVHError, gzip.BadGzipFile, EOFError, UnicodeDecodeError) as error:
-        raise ValidationError(f"This is not a readable BVH file: {error}") from error
+        problem = file_problem(str(error))  # the reader's words made plain ("values", not channels)
+        raise ValidationError(f"This is not a readable BVH file: {problem}") from error
     if motion.frames.shape[0] < MIN_FRAMES:
         raise ValidationError(
             f"The recording has {motion.frames.shape[0]} frames; at least {MIN_FRAMES} are needed."
@@ -98,10 +100,27 @@ def check_skeleton(motion: Motion, exercise: Exercise) -> None:
 
 
 def check_not_duplicate(patient: Patient, checksum: str) -> None:
-    earlier = Recording.objects.filter(patient=patient, checksum=checksum).first()
+    """Refuse a file this patient already has, unless that upload still waits for its exercise
+    (it is then brought up to date by `store_recording`, not stored twice)."""
+    earlier = pending_excluded(Recording.objects.filter(patient=patient, checksum=checksum)).first()
     if earlier is not None:
         when = timezone.localtime(earlier.uploaded_at).strftime("%d %b %Y %H:%M")
         raise ValidationError(f"This file was already uploaded for this patient on {when}.")
+
+
+def pending_excluded(recordings):
+    return recordings.exclude(exercise__isnull=True, runs__isnull=True)
+
+
+def pending_upload(patient: Patient, checksum: str) -> Recording | None:
+    """An earlier upload of the same file that never got an exercise (nor an analysis)."""
+    return (
+        Recording.objects.filter(
+            patient=patient, checksum=checksum, exercise__isnull=True, runs__isnull=True
+        )
+        .order_by("-uploaded_at")
+        .first()
+    )
 
 
 def store_recording(
@@ -117,8 +136,15 @@ def store_recording(
     """Store the recording, its file and its first run in one transaction.
 
     The file is written before the row commits; if the transaction fails it is deleted again, so a
-    failed upload leaves no orphan file behind.
+    failed upload leaves no orphan file behind. The same file again while its first upload
+    still waits for its exercise updates that upload instead (`reuse_pending`).
     """
+    pending = pending_upload(patient, parsed.checksum)
+    if pending is not None:
+        return reuse_pending(
+            pending, exercise=exercise, user=user, pain_score=pain_score, note=note,
+            suggestion=suggestion,
+        )  # fmt: skip
     recording = new_recording(
         parsed, patient=patient, exercise=exercise, user=user, pain_score=pain_score, note=note
     )
@@ -136,6 +162,25 @@ def store_recording(
         if recording.file.name:
             recording.file.storage.delete(recording.file.name)
         raise
+    return recording, run
+
+
+def reuse_pending(
+    recording: Recording, *, exercise, user, pain_score, note, suggestion
+) -> tuple[Recording, AnalysisRun | None]:
+    """The uploader's new answers on the waiting upload (its file is the same bytes), and its
+    analysis started when an exercise is now named."""
+    recording.uploaded_by, recording.uploaded_at = user, timezone.now()
+    recording.pain_score, recording.note = pain_score, note
+    if suggestion is not None:
+        recording.suggested_exercise = suggestion.exercise
+        recording.suggestion_distance = suggestion.distance
+    fields = ["uploaded_by", "uploaded_at", "pain_score", "note"]
+    fields += ["suggested_exercise", "suggestion_distance"]
+    with transaction.atomic():
+        recording.save(update_fields=fields)
+        Patient.objects.filter(pk=recording.patient_id).update(last_activity_at=timezone.now())
+        run = services.confirm_exercise(recording, exercise) if exercise is not None else None
     return recording, run
 
 

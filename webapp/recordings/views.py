@@ -16,11 +16,10 @@ from webapp.accounts.permissions import (
     get_recording_for_user,
     require_staff,
     visible_exercises,
-    visible_patients,
 )
-from webapp.recordings import services
+from webapp.recordings import services, warmup
 from webapp.recordings.corrections import apply_corrections, corrections_of
-from webapp.recordings.forms import UploadForm
+from webapp.recordings.forms import UploadForm, upload_choices
 from webapp.recordings.models import AnalysisRun
 from webapp.recordings.results import result_data
 from webapp.recordings.storage import DamagedRecordingError, read_verified
@@ -28,12 +27,11 @@ from webapp.recordings.uploads import check_skeleton, store_recording, suggest_e
 
 
 def upload_form(request: HttpRequest) -> UploadForm:
-    patients = visible_patients(request.user).filter(archived_at__isnull=True)
-    exercises = visible_exercises(request.user).filter(archived_at__isnull=True)
+    choices = upload_choices(request.user)  # a patient: themselves, their prescribed exercises
     initial = {"patient": request.GET.get("patient"), "exercise": request.GET.get("exercise")}
     if request.method == "POST":
-        return UploadForm(request.POST, request.FILES, patients=patients, exercises=exercises)
-    return UploadForm(initial=initial, patients=patients, exercises=exercises)
+        return UploadForm(request.POST, request.FILES, **choices)
+    return UploadForm(initial=initial, **choices)
 
 
 @login_required
@@ -53,9 +51,12 @@ def upload(request: HttpRequest) -> HttpResponse:
         if recording.exercise_id is None:
             messages.info(request, "Recording uploaded. Please confirm which exercise it is.")
             return redirect("recordings:confirm", pk=recording.pk)
-        messages.success(request, "Recording uploaded; the analysis has started.")
+        messages.success(
+            request, "Recording uploaded. The analysis runs in the background: progress below."
+        )
         return redirect("recordings:detail", pk=recording.pk)
     status = 400 if request.method == "POST" else 200
+    warmup.start()  # while the person chooses a file
     return render(request, "recordings/upload.html", {"form": form}, status=status)
 
 
@@ -138,7 +139,7 @@ def confirm(request: HttpRequest, pk) -> HttpResponse:
     )
     if request.method == "POST" and form.is_valid():
         services.confirm_exercise(recording, form.cleaned_data["exercise"])
-        messages.success(request, "Thank you; the analysis has started.")
+        messages.success(request, "Thank you. The analysis runs in the background: progress below.")
         return redirect("recordings:detail", pk=recording.pk)
     status = 400 if request.method == "POST" else 200
     context = {"recording": recording, "form": form}

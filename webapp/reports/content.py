@@ -8,11 +8,13 @@ from typing import Any
 from django.utils import timezone
 
 from webapp.patients.progress import patient_progress
+from webapp.recordings.words import body_part, key_pose_name
 from webapp.reports import playback
 from webapp.reports.clinical import clinical_content
 from webapp.reports.timeline import timeline
 
 MAX_POSES = 4
+MAX_ROM_LINES = 5  # body parts per exercise chart (a legend of more is unreadable)
 
 
 def fmt(value: Any, digits: int = 0) -> str:
@@ -26,11 +28,12 @@ def key_poses(run) -> tuple[list, list[int]]:
         return [], []
     positions = arrays["patient_positions"]
     kinds = playback.type_names(run)
+    fps = float(run.result.fps or run.recording.fps or 30.0)
     poses = []
     for mark in run.result.landmarks[:MAX_POSES]:
         frame = min(mark.frame, positions.shape[0] - 1)
-        name = kinds.get(str(mark.type), f"pose {mark.type}")
-        poses.append((f"{name} · frame {frame}", positions[frame]))
+        name = key_pose_name(mark.type, kinds)
+        poses.append((f"{name} · {frame / fps:.1f} s", positions[frame]))
     return poses, [int(p) for p in arrays["parents"]]
 
 
@@ -63,8 +66,8 @@ def recording_content(recording) -> dict[str, Any]:
         "header": [
             f"Clinic: {recording.clinic.name}",
             f"Patient: {recording.patient.display_name} · Exercise: {exercise}",
-            f"Recorded {recording.uploaded_at:%d %b %Y %H:%M} · {recording.n_frames} frames at "
-            f"{recording.fps:.0f} fps · report made {timezone.now():%d %b %Y %H:%M}",
+            f"Recorded {recording.uploaded_at:%d %b %Y %H:%M} · {recording.duration_s:.1f} s at "
+            f"{recording.fps:.0f} frames per second · report made {timezone.now():%d %b %Y %H:%M}",
         ],
         "analysed": run is not None and run.result is not None,
     }
@@ -76,7 +79,7 @@ def recording_content(recording) -> dict[str, Any]:
     content["feedback"] = [comment.text for comment in result.feedback]
     content.update(clinical_content(result, recording.exercise))
     content["rom"] = [
-        [joint, fmt(value, 1), fmt(result.gamma.get(joint), 2)]
+        [body_part(joint).capitalize(), fmt(value, 1), fmt(result.gamma.get(joint), 2)]
         for joint, value in result.range_of_motion.items()
     ]
     content["poses"], content["parents"] = key_poses(run)
@@ -98,12 +101,17 @@ def series_by_exercise(points: list[dict], field: str) -> dict[str, list[tuple[f
     return series
 
 
-def rom_series(points: list[dict]) -> dict[str, list[tuple[float, float]]]:
-    series: dict[str, list[tuple[float, float]]] = {}
+def rom_series(points: list[dict]) -> dict[str, dict[str, list[tuple[float, float]]]]:
+    """Per exercise, the range of motion of (up to) five body parts over the sessions: a line
+    only ever joins sessions of one exercise (x: the session's number in the report)."""
+    charts: dict[str, dict[str, list[tuple[float, float]]]] = {}
     for i, point in enumerate(points):
+        series = charts.setdefault(point.get("exercise_name") or "Unknown exercise", {})
         for joint, value in (point.get("range_of_motion") or {}).items():
-            series.setdefault(joint, []).append((i + 1, float(value)))
-    return dict(list(series.items())[:5])
+            label = body_part(joint)
+            if label in series or len(series) < MAX_ROM_LINES:
+                series.setdefault(label, []).append((i + 1, float(value)))
+    return charts
 
 
 def progress_content(patient, since: date | None, until: date | None) -> dict[str, Any]:

@@ -19,6 +19,7 @@ from reportlab.lib.styles import getSampleStyleSheet
 from reportlab.lib.units import cm
 from reportlab.platypus import Paragraph, SimpleDocTemplate, Spacer, Table, TableStyle
 
+from webapp.recordings.words import LEVEL_HELP
 from webapp.reports.clinical import clinical_flowables
 from webapp.reports.pdf_timeline import timeline_drawing
 
@@ -61,10 +62,15 @@ def bar_chart(values: list[float], labels: list[str], title: str) -> Drawing:
     chart.bars[0].fillColor = PALETTE[0]
     drawing.add(chart)
     drawing.add(String(40, 6 * cm - 12, title, fontSize=10))
+    drawing.add(String(40 + 6 * cm, 4, "repetition (number)", fontSize=8))
+    drawing.add(String(4, 30 + 4 * cm + 6, "score (0–100)", fontSize=8))
     return drawing
 
 
-def line_chart(series: dict[str, list[tuple[float, float]]], title: str) -> Drawing:
+def line_chart(
+    series: dict[str, list[tuple[float, float]]], title: str, y_title: str = ""
+) -> Drawing:
+    """One line per series (x: session number), with axis titles and a legend of five."""
     drawing = Drawing(16 * cm, 6.5 * cm)
     names = [name for name, points in series.items() if points]
     plot = LinePlot()
@@ -77,6 +83,9 @@ def line_chart(series: dict[str, list[tuple[float, float]]], title: str) -> Draw
         plot.lines[i].strokeWidth = 1.5
     drawing.add(plot)
     drawing.add(String(40, 6.5 * cm - 12, title, fontSize=10))
+    drawing.add(String(40 + 5.5 * cm, 8, "session (number in this report)", fontSize=8))
+    if y_title:
+        drawing.add(String(4, 40 + 4.4 * cm + 6, y_title, fontSize=8))
     for i, name in enumerate(names[:5]):
         y = 6.5 * cm - 30 - 12 * i
         drawing.add(Line(12.6 * cm, y + 3, 13.2 * cm, y + 3, strokeColor=PALETTE[i]))
@@ -153,7 +162,8 @@ def recording_pdf(content: dict[str, Any]) -> bytes:
         story.append(pose_drawing(content["poses"], content["parents"]))
     if content.get("rom"):
         story.append(paragraph("Range of motion (degrees)", "Heading2"))
-        story.append(table([["Joint", "Range", "γ"], *content["rom"]]))
+        story.append(table([["Body part", "Range (degrees)", "Level (0–1)"], *content["rom"]]))
+        story.append(paragraph(LEVEL_HELP))
     story += clinical_flowables(content)
     return build(story, content["title"])
 
@@ -166,9 +176,12 @@ def progress_pdf(content: dict[str, Any]) -> bytes:
     if not rows:
         story.append(paragraph("No analysed recordings in this period."))
         return build(story, content["title"])
-    story.append(line_chart(content["score_series"], "Score by session"))
-    if content["rom_series"]:
-        story.append(line_chart(content["rom_series"], "Range of motion by session (degrees)"))
+    story.append(line_chart(content["score_series"], "Score by session", "score (0–100)"))
+    for exercise, series in content["rom_series"].items():
+        if series:
+            title = f"{exercise}: range of motion by session"
+            story.append(line_chart(series, title, "range of motion (degrees)"))
     story.append(paragraph("Sessions", "Heading2"))
-    story.append(table([["Date", "Exercise", "Score", "Repetitions", "Pain"], *rows]))
+    head = ["Date", "Exercise", "Score (0–100)", "Repetitions", "Pain (0–10)"]
+    story.append(table([head, *rows]))
     return build(story, content["title"])

@@ -15,12 +15,12 @@ from analysis.kinematics.forward_kinematics import segment_angles
 from analysis.pipeline import AnalysisSummary
 from analysis.pipeline.results import assessment_to_json
 from webapp.recordings.models import AnalysisRun
+from webapp.recordings.words import SKELETON_LABELS, body_part, key_pose_name
 
-SKELETONS = (
-    ("patient_positions", "patient", "Patient"),
-    ("patient_adjusted_positions", "patient_adjusted", "Patient adjusted"),
-    ("tutor_positions", "tutor", "Tutor"),
-    ("tutor_adjusted_positions", "tutor_adjusted", "Tutor adjusted"),
+# (array, key, what people read: "your movement", "the reference adjusted to your level", ...)
+SKELETONS = tuple(
+    (f"{key}_positions", key, SKELETON_LABELS[key])
+    for key in ("patient", "patient_adjusted", "tutor", "tutor_adjusted")
 )
 MAX_CHART_POINTS = 600  # long series are downsampled for display
 
@@ -95,7 +95,9 @@ def angle_series(
                 series.append(
                     {
                         "joint": names[joint],
+                        "label": body_part(names[joint]),
                         "skeleton": skeleton,
+                        "skeleton_label": SKELETON_LABELS[skeleton],
                         "values": np.round(values, 2).tolist(),
                     }
                 )
@@ -114,7 +116,7 @@ def description(run: AnalysisRun, arrays: dict[str, np.ndarray]) -> dict[str, An
     names = joint_names(run, arrays, patient.shape[1])
     kinds = type_names(run)
     landmarks = [
-        {"frame": int(f), "type": int(t), "name": kinds.get(str(int(t)), f"pose {int(t)}")}
+        {"frame": int(f), "type": int(t), "name": key_pose_name(int(t), kinds)}
         for f, t in zip(
             arrays.get("landmark_frames", []), arrays.get("landmark_types", []), strict=False
         )
@@ -125,6 +127,7 @@ def description(run: AnalysisRun, arrays: dict[str, np.ndarray]) -> dict[str, An
         "joints": int(patient.shape[1]),
         "fps": float(result.fps or run.recording.fps or 30.0),
         "names": names,
+        "labels": [body_part(name) for name in names],
         "parents": [int(p) for p in arrays["parents"]],
         "skeletons": [{"key": k, "label": label} for _, k, label in skeleton_keys(arrays)],
         "layout": "float32 little-endian [skeleton][frame][joint][xyz]",

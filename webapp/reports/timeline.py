@@ -13,6 +13,7 @@ from typing import Any
 
 from analysis.pipeline import AnalysisSummary
 from analysis.pipeline.results import RepetitionResult
+from webapp.recordings.words import key_pose_name
 
 # Paper 001's guidance types as the therapist reads them.
 GUIDANCE_WORDS = {
@@ -128,7 +129,7 @@ def timeline(
     scale = _Scale(result.frames or fallback_frames, result.fps)
 
     def pose(mark: Any) -> dict[str, Any]:
-        name = type_names.get(str(mark.type), f"key pose {mark.type}")
+        name = key_pose_name(mark.type, type_names)
         return scale.mark(mark.frame, name=name, type=mark.type)
 
     by_origin = {

@@ -6,7 +6,8 @@
   if (!data || !window.Plotly) return;
   const exercises = JSON.parse(data.textContent);
   const config = { displaylogo: false, responsive: true };
-  const layout = (title, extra = {}) => ({ margin: { t: 10, r: 10, b: 40, l: 55 }, yaxis: { title, rangemode: "tozero" }, legend: { orientation: "h" }, ...extra });
+  // Plotly 3 reads axis titles only as { text }: a bare string leaves the axis without its unit.
+  const layout = (title, extra = {}) => ({ margin: { t: 10, r: 10, b: 40, l: 55 }, yaxis: { title: { text: title }, rangemode: "tozero" }, legend: { orientation: "h" }, ...extra });
   const moving = (values) => Math.max(0, ...values.filter((v) => v !== null)) >= 10;
   exercises.forEach((ex) => {
     const angles = ex.angles.map((a) => ({
@@ -17,7 +18,7 @@
     Plotly.react(`${ex.id}-angles`, angles, layout("range of motion (°)"), config);
     if (ex.workspace.length) {
       const reach = ex.workspace.map((h) => ({ x: ex.dates, y: h.percent, name: h.label, mode: "lines+markers", hovertemplate: `${h.label}: %{y:.1f} %<extra>%{x}</extra>` }));
-      Plotly.react(`${ex.id}-workspace`, reach, layout("% of the front hemisphere", { yaxis: { title: "% of the front hemisphere", range: [0, 100] } }), config);
+      Plotly.react(`${ex.id}-workspace`, reach, layout("% of the front hemisphere", { yaxis: { title: { text: "% of the front hemisphere" }, range: [0, 100] } }), config);
     }
   });
   document.getElementById("clinical-progress").dataset.ready = "1";

@@ -1,20 +1,30 @@
 // Progression charts of one patient over sessions (patients:progress JSON endpoint): score, range
-// of motion per joint, γ, repetitions against the prescribed target, and an adherence calendar.
+// of motion and level per body part (one line per exercise and body part: sessions of different
+// exercises are never joined), repetitions against the prescribed target, an adherence calendar.
 (async function () {
   const box = document.getElementById("progress");
   if (!box || !window.Plotly) return;
-  const { points: all } = await fetch(box.dataset.url).then((r) => r.json());
+  const { points: all, labels = {} } = await fetch(box.dataset.url).then((r) => r.json());
   const prescriptions = JSON.parse(document.getElementById("prescriptions").textContent);
   if (!all.length) { document.getElementById("progress-empty").hidden = false; box.dataset.ready = "1"; return; }
   const config = { displaylogo: false, responsive: true };
-  const layout = (title, extra = {}) => ({ margin: { t: 10, r: 10, b: 40, l: 50 }, yaxis: { title }, legend: { orientation: "h" }, ...extra });
+  const layout = (title, extra = {}) => ({ margin: { t: 10, r: 10, b: 40, l: 60 }, xaxis: { title: { text: "date" } }, yaxis: { title: { text: title } }, legend: { orientation: "h" }, ...extra });
   const select = document.getElementById("exercise-filter");
   [...new Set(all.map((p) => p.exercise_name || "?"))].forEach((name) => select.add(new Option(name, name)));
 
-  function perJoint(points, field) {
-    const dates = points.map((p) => p.date.slice(0, 10));
-    const joints = [...new Set(points.flatMap((p) => Object.keys(p[field] || {})))];
-    return joints.map((j) => ({ x: dates, y: points.map((p) => (p[field] || {})[j] ?? null), name: j, mode: "lines+markers", connectgaps: true }));
+  // One line per exercise and body part; the exercise is named when several are shown.
+  function perJoint(points, field, several) {
+    const lines = [];
+    const byExercise = {};
+    points.forEach((p) => { (byExercise[p.exercise_name || "?"] ??= []).push(p); });
+    for (const [exercise, ps] of Object.entries(byExercise)) {
+      const joints = [...new Set(ps.flatMap((p) => Object.keys(p[field] || {})))];
+      for (const j of joints) {
+        const part = labels[j] ?? j;
+        lines.push({ x: ps.map((p) => p.date.slice(0, 10)), y: ps.map((p) => (p[field] || {})[j] ?? null), name: several ? `${exercise} · ${part}` : part, mode: "lines+markers", connectgaps: true });
+      }
+    }
+    return lines;
   }
 
   function adherence(points) {
@@ -37,16 +47,17 @@
     const byExercise = {};
     points.forEach((p) => { (byExercise[p.exercise_name || "?"] ??= []).push(p); });
     const scores = Object.entries(byExercise).map(([name, ps]) => ({ x: ps.map((p) => p.date.slice(0, 10)), y: ps.map((p) => p.score), name, mode: "lines+markers" }));
-    Plotly.react("chart-score", scores, layout("score", { yaxis: { title: "score", range: [0, 100] } }), config);
-    Plotly.react("chart-rom", perJoint(points, "range_of_motion"), layout("degrees"), config);
-    Plotly.react("chart-gamma", perJoint(points, "gamma"), layout("γ"), config);
+    const several = Object.keys(byExercise).length > 1;
+    Plotly.react("chart-score", scores, layout("score (0–100)", { yaxis: { title: { text: "score (0–100)" }, range: [0, 100] } }), config);
+    Plotly.react("chart-rom", perJoint(points, "range_of_motion", several), layout("range of motion (degrees)"), config);
+    Plotly.react("chart-gamma", perJoint(points, "gamma", several), layout("level (0–1)", { yaxis: { title: { text: "level (0–1)" }, range: [0, 1.05] } }), config);
     const reps = [{ type: "bar", x: dates, y: points.map((p) => p.repetitions), name: "repetitions", marker: { color: "#1f6feb" } }];
     const targets = prescriptions.filter((p) => !chosen || p.exercise === chosen).map((p) => ({
       x: [p.start, p.end || new Date().toISOString().slice(0, 10)], y: [p.target_repetitions, p.target_repetitions],
       name: `target · ${p.exercise}`, mode: "lines", line: { dash: "dash" },
     }));
-    Plotly.react("chart-reps", [...reps, ...targets], layout("repetitions"), config);
-    Plotly.react("chart-adherence", adherence(points), layout("", { margin: { t: 10, r: 10, b: 40, l: 40 } }), config);
+    Plotly.react("chart-reps", [...reps, ...targets], layout("repetitions (count)"), config);
+    Plotly.react("chart-adherence", adherence(points), layout("day of the week", { margin: { t: 10, r: 10, b: 40, l: 60 }, xaxis: { title: { text: "week starting" } } }), config);
   }
   select.addEventListener("change", draw);
   draw();

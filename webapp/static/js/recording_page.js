@@ -5,19 +5,8 @@ import { Playback, SKELETON_COLOURS } from "./viewer.js";
 // Paper 001's guidance types in the words the therapist reads (as webapp/reports/timeline.py).
 const GUIDANCE_WORDS = { "too fast": "too fast", "too slow": "too slow", overdone: "went too far", incomplete: "did not reach far enough" };
 const guidanceWords = (type) => GUIDANCE_WORDS[type] ?? String(type).replaceAll("_", " ");
-// Rig joint names in plain words, as analysis.feedback.text.joint_label: "LeftUpLeg" -> "left thigh".
-const PLAIN_WORDS = { "up leg": "thigh", "upper leg": "thigh", "fore arm": "forearm", collar: "collarbone", "toe base": "toes" };
-function plainJoint(name) {
-  const words = (String(name).split(/[:|]/).pop().match(/[A-Z]+(?=[A-Z][a-z])|[A-Z]?[a-z]+|[A-Z]+|[0-9]+/g) || []).map((w) => w.toLowerCase());
-  const sides = { left: "left", l: "left", right: "right", r: "right" };
-  let side = "";
-  if (words.length > 1 && sides[words[0]]) side = sides[words.shift()];
-  else if (words.length > 1 && sides[words[words.length - 1]]) side = sides[words.pop()];
-  let body = words.join(" ");
-  for (const [from, to] of Object.entries(PLAIN_WORDS)) body = body.replace(new RegExp(`\\b${from}\\b`), to);
-  return (side ? `${side} ${body}` : body) || String(name).toLowerCase();
-}
-const SKELETON_WORDS = { patient: "patient", tutor: "reference", tutor_adjusted: "reference, matched in time" };
+// Body parts and skeletons come named in plain words by the server (webapp.recordings.words):
+// series carry `label` ("left thigh") and `skeleton_label` ("the reference adjusted to your level").
 const hex = (n) => "#" + n.toString(16).padStart(6, "0");
 const $ = (id) => document.getElementById(id);
 
@@ -126,7 +115,7 @@ function charts(playback) {
   // Three joints shown at first (the rest one click away in the legend) keep the chart readable.
   const joints = [...new Set(meta.angles.series.map((s) => s.joint))];
   const traces = meta.angles.series.map((s) => ({
-    x, y: s.values, name: `${plainJoint(s.joint)} · ${SKELETON_WORDS[s.skeleton] ?? s.skeleton}`, mode: "lines",
+    x, y: s.values, name: `${s.label ?? s.joint} · ${s.skeleton_label ?? s.skeleton}`, mode: "lines",
     line: { dash: s.skeleton === "patient" ? "solid" : "dot" },
     visible: joints.indexOf(s.joint) < 3 ? true : "legendonly",
   }));
@@ -136,7 +125,7 @@ function charts(playback) {
   Plotly.newPlot(chart, traces, layout, { displaylogo: false, responsive: true });
   chart.on("plotly_click", (e) => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(e.points[0].x * meta.fps); });
   const reps = meta.repetitions;
-  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => (r.guidance || []).map((g) => guidanceWords(g.type)).join(", ")), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 40, l: 50 }, xaxis: { title: { text: "repetition" }, type: "category" }, yaxis: { range: [0, 100], title: { text: "score (0–100)" } } }, { displaylogo: false, responsive: true });
+  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => (r.guidance || []).map((g) => guidanceWords(g.type)).join(", ")), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 40, l: 50 }, xaxis: { title: { text: "repetition (number)" }, type: "category" }, yaxis: { range: [0, 100], title: { text: "score (0–100)" } } }, { displaylogo: false, responsive: true });
   // The time cursor is a positioned overlay, not a Plotly shape: relayout is too slow to run
   // at the animation rate.
   const cursor = document.createElement("div");
@@ -168,7 +157,7 @@ async function main() {
   const label = $("frame-label");
   const scrub = $("scrub");
   playback.onFrame((frame) => {
-    label.textContent = `frame ${frame} · ${(frame / data.meta.fps).toFixed(2)} s`;
+    label.textContent = `${(frame / data.meta.fps).toFixed(2)} s`;
     scrub.value = frame;
     moveCursor(frame);
     showCaption(frame);

@@ -5,6 +5,7 @@
 // [skeleton][frame][joint][xyz]). The browser never parses BVH.
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { hiddenParts } from "./skeleton_shape.js";
 
 // Colour per skeleton kind, the same in the toggles, the 3D view and the charts.
 export const SKELETON_COLOURS = {
@@ -26,6 +27,7 @@ export class Playback {
     this.loop = null; // [start, end] of the repetition being looped
     this.visible = meta.skeletons.map((s, i) => i === 0 || s.key === "tutor_adjusted");
     this.sideBySide = false;
+    this.hidden = hiddenParts(meta.parents); // a floor-level placement root is not drawn
     this.listeners = [];
     this.rafCount = 0;
     this.buildScene();
@@ -128,9 +130,9 @@ export class Playback {
     const q = new THREE.Quaternion();
     for (let j = 0; j < this.nJoints; j++) {
       a.set(p[base + 3 * j] + dx, p[base + 3 * j + 1], p[base + 3 * j + 2]);
-      joints.setMatrixAt(j, m.makeTranslation(a.x, a.y, a.z));
+      joints.setMatrixAt(j, this.hidden.joints.has(j) ? m.makeScale(0, 0, 0) : m.makeTranslation(a.x, a.y, a.z));
       const parent = this.meta.parents[j];
-      if (parent < 0) { bones.setMatrixAt(j, m.makeScale(0, 0, 0)); continue; }
+      if (parent < 0 || this.hidden.bones.has(j)) { bones.setMatrixAt(j, m.makeScale(0, 0, 0)); continue; }
       b.set(p[base + 3 * parent] + dx, p[base + 3 * parent + 1], p[base + 3 * parent + 2]);
       const length = a.distanceTo(b);
       q.setFromUnitVectors(up, b.clone().sub(a).normalize());

@@ -3,7 +3,9 @@
     manage.py fill_large_clinic --patients 10000 --runs 1000000
 
 On PostgreSQL the rows stream through COPY (one per table, in one transaction); other databases
-get batched INSERTs, which is enough for the small clinics the query-count tests use. Never run
+get batched INSERTs, which is enough for the small clinics the query-count tests use. Each
+succeeded run gets the progress point a worker stores, and a line every 100,000 rows shows how
+far the fill got. Never run
 it against a database that holds real patients: it is meant for a throw-away database.
 """
 
@@ -22,15 +24,19 @@ from django.db import connection, models, transaction
 from django.utils import timezone
 
 from webapp.accounts.models import Clinic, Role, User
+from webapp.dashboard.models import ProgressPoint
 from webapp.demo import large_clinic as gen
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from webapp.patients.models import Patient, PerformanceLevel, Prescription
+from webapp.patients.progress_store import rendered, summary_values
 from webapp.recordings.models import AnalysisRun, Recording
 
 EXERCISE_NAMES = ("Deep squat", "Sit to stand", "Shoulder abduction")
 THERAPIST_PASSWORD = "large-clinic-therapist-pw"
 COPY_ESCAPES = str.maketrans({"\\": "\\\\", "\t": "\\t", "\n": "\\n", "\r": "\\r"})
 FAILURE = "The recording is too short: at least two repetitions are needed."
+POINT_COLUMNS = ProgressPoint._meta.concrete_fields
+REPORT_EVERY = 100_000  # rows between progress lines (a full fill takes a quarter of an hour)
 
 
 class JsonText(str):
@@ -194,14 +200,35 @@ class Filler:
         self.timed(Recording, self.recording_rows)
         self.timed(AnalysisRun, self.run_rows)
         self.timed(PerformanceLevel, self.level_rows)
+        self.timed(ProgressPoint, self.point_rows)
         return self.timings
 
     def timed(self, model, rows) -> None:
+        table = model._meta.db_table
         started = time.perf_counter()
         with TableWriter(model) as writer:
             for row in rows():
                 writer.add(row)
-        self.timings[model._meta.db_table] = (writer.count, time.perf_counter() - started)
+                if writer.count % REPORT_EVERY == 0:
+                    self.progress(table, writer.count, time.perf_counter() - started)
+        self.timings[table] = (writer.count, time.perf_counter() - started)
+        self.progress(table, writer.count, self.timings[table][1])
+
+    def progress(self, table: str, rows: int, seconds: float) -> None:
+        self.stdout.write(f"  {table}: {rows:,} rows in {seconds:.0f} s", ending="\n")
+        self.stdout.flush()
+
+    def point_rows(self) -> Iterator[dict]:
+        """The progress point a worker stores when a run succeeds, rendered from the generated
+        summary (reading a million summaries back would take longer than writing them)."""
+        values = [summary_values(json.loads('{"score": 0, ' + tail)) for tail in self.tails]
+        for index in range(len(self.patient_ids)):
+            for upload in self.uploads(index):
+                tail = values[upload.recording.int % len(self.tails)]
+                for run_id, status in upload.runs:
+                    if status == "succeeded":
+                        point = rendered({**tail, "pk": run_id, "score": float(upload.score)})
+                        yield {f.attname: getattr(point, f.attname) for f in POINT_COLUMNS}
 
     def make_exercises(self) -> list[tuple[Exercise, ExerciseModel]]:
         made = []

@@ -1,0 +1,106 @@
+"""A live session in a real browser: a capture client streams a UI-PRMD session into the server
+(`manage.py runserver`, what `make run` serves, with its in-memory channel layer) while a
+therapist watches the live page; the page's counter reaches the offline analysis's count and
+guidance is shown.
+
+The server runs in its own process on a throw-away SQLite database (WebSockets need the ASGI
+server; pytest-django's live server speaks WSGI only).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from pathlib import Path
+
+import pytest
+
+from analysis.bvh import read
+from analysis.online.remote import stream_to
+from analysis.online.sources import Source, header_text, paced
+from analysis.pipeline import analyse, build_model
+from bench.bench_live import (
+    create_session,
+    free_port,
+    server_env,
+    setup_world,
+    start_server,
+    stop_server,
+)
+from tests.personas import FIXTURES, PASSWORD, fixture_landmarks
+
+pytestmark = pytest.mark.e2e
+TUTOR = "sessions/m07_s01_correct.bvh.gz"
+SESSION = FIXTURES / "sessions/m07_s03_incorrect.bvh.gz"
+SPEED = 6.0  # times real time: 180 frames/s, under the server's rate limit
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("live-server")
+    env = server_env(Path(folder), None)
+    world = setup_world(env)
+    port = free_port()
+    proc = start_server("runserver", env, port, Path(folder) / "server.log")
+    yield f"http://127.0.0.1:{port}", world
+    stop_server(proc)
+
+
+def offline_count() -> int:
+    frames, types = fixture_landmarks(TUTOR)
+    model = build_model(read(FIXTURES / TUTOR), frames, types)
+    return len(analyse(read(SESSION), model).summary.repetitions)
+
+
+def stream_in_background(url: str, token: str) -> tuple[threading.Thread, dict]:
+    motion = read(SESSION)
+    out: dict = {}
+
+    def run() -> None:
+        frames = paced(motion.frames, motion.frame_time, SPEED)
+        source = Source(header_text(motion), motion.frame_time, frames)
+        out["summary"] = asyncio.run(stream_to(url, token, source))
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    return thread, out
+
+
+def test_streamed_session_counts_on_the_live_page(server, browser):
+    base, world = server
+    expected = offline_count()
+    path = create_session(base, world)
+    context = browser.new_context(viewport={"width": 1280, "height": 1000})
+    page = context.new_page()
+    page.set_default_timeout(60_000)
+    try:
+        page.goto(f"{base}/accounts/login/")
+        page.fill("#id_username", "therapist")
+        page.fill("#id_password", PASSWORD)
+        page.click("button[type=submit]")
+        page.wait_for_url(lambda url: "/accounts/login" not in url)
+        session_id = path.rstrip("/").split("/")[-1]
+        page.goto(f"{base}/live/{session_id}/")
+        assert "Waiting for frames" in page.inner_text("#live-state")
+        page.wait_for_timeout(500)  # the page's WebSocket is open before frames flow
+
+        thread, out = stream_in_background(base.replace("http", "ws") + path, world["token"])
+        page.wait_for_function("() => document.getElementById('live-state').textContent === 'Live'")
+        page.wait_for_function(
+            "() => document.getElementById('guidance').textContent.trim().length > 0"
+        )
+        guidance = page.inner_text("#guidance")
+        assert "Repetition 1" in guidance or any(
+            tip in guidance for tip in ("Slow down", "faster", "Not so far", "Go further")
+        )
+        thread.join(timeout=120)
+        assert out["summary"]["repetitions"] == expected
+        page.wait_for_function(
+            "() => document.getElementById('live-state').textContent === 'Ended'"
+        )
+        assert int(page.inner_text("#rep-count")) == expected
+        assert page.locator("#reps tr").count() == expected
+        assert int(page.inner_text("#errors")) == 0
+        assert f"Live: {expected} repetitions" in page.inner_text("#summary")
+    finally:
+        context.close()

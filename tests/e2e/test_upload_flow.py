@@ -1,0 +1,134 @@
+"""Uploads as a user makes them, against the site started the way `make run` starts it (server and
+a real Celery worker on the filesystem broker, `tests/local_server.py`), never eager tasks:
+
+- the upload page answers at once; the recording page then shows the analysis queued or running,
+  its progress moving, and done; the home page lists it under "Analyses under way" meanwhile;
+- leaving the exercise blank stores the file and suggests the exercise; confirming the suggestion
+  starts the analysis, which finishes; uploading the same file again while the first upload still
+  waits for its exercise reuses that upload instead of refusing it as a duplicate;
+- a bad answer on the form keeps what was typed.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.local_server import LocalServer
+from tests.personas import PASSWORD
+
+pytestmark = pytest.mark.e2e
+DATA = Path(__file__).resolve().parents[2] / "data/ui-prmd"
+SQUAT = DATA / "sessions/m01_s02_correct.bvh.gz"
+ABDUCTION = DATA / "reps/m07_s01_e02.bvh.gz"
+SETUP = """
+from tests.personas import make_exercise, make_user
+from webapp.accounts.models import Clinic, Role
+from webapp.patients.models import Patient
+clinic = Clinic.objects.create(name="Upload clinic")
+therapist = make_user("uploader", clinic, Role.THERAPIST)
+patient = Patient.objects.create(clinic=clinic, display_name="Ann Example")
+patient.therapists.add(therapist)
+make_exercise(clinic, source="reps/m01_s01_e01.bvh.gz")
+make_exercise(clinic, name="Shoulder abduction", source="reps/m07_s01_e01.bvh.gz")
+"""
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    server = LocalServer(tmp_path_factory.mktemp("make-run"), demo=False, setup=SETUP)
+    server.extra_env = {"ANALYSIS_STAGE_DELAY_SECONDS": "0.5"}  # progress long enough to watch
+    with server:
+        yield server
+
+
+@pytest.fixture
+def user_page(browser, site):
+    context = browser.new_context(viewport={"width": 1280, "height": 1000})
+    page = context.new_page()
+    page.set_default_timeout(60_000)
+    page.goto(f"{site.url}/accounts/login/")
+    page.fill("#id_username", "uploader")
+    page.fill("#id_password", PASSWORD)
+    page.click("button[type=submit]")
+    page.wait_for_url(lambda url: "/accounts/login" not in url)
+    yield page
+    context.close()
+
+
+def submit_upload(page, url: str, path: Path, exercise: str = "", **fields: str) -> float:
+    page.goto(f"{url}/recordings/upload/")
+    page.select_option("#id_patient", label="Ann Example")
+    if exercise:
+        page.select_option("#id_exercise", label=exercise)
+    for name, value in fields.items():
+        page.fill(f"#id_{name}", value)
+    page.set_input_files("#id_file", str(path))
+    start = time.perf_counter()
+    page.click("button[type=submit]")
+    page.wait_for_load_state("domcontentloaded")
+    return time.perf_counter() - start
+
+
+def test_upload_answers_at_once_and_progress_moves_to_done(user_page, site):
+    page = user_page
+    seconds = submit_upload(page, site.url, SQUAT, exercise="Deep squat", pain_score="2")
+    page.wait_for_url("**/recordings/*/")
+    recording_url = page.url
+    # The answer came before the analysis ended: the page shows it still under way.
+    assert page.get_attribute("#run-status", "data-status") in ("queued", "running")
+    assert seconds < 10, f"the upload took {seconds:.1f} s"
+
+    page.goto(f"{site.url}/")
+    page.wait_for_selector("#active-list li.run", timeout=30_000)
+    assert "Deep squat" in page.inner_text("#active-list")
+
+    page.goto(recording_url)
+    seen = set()
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline:
+        status = page.get_attribute("#run-status", "data-status")
+        if status == "succeeded":
+            break
+        value = page.get_attribute("#run-status .progress", "aria-valuenow")
+        seen.add(int(value or 0))
+        page.wait_for_timeout(400)
+    page.wait_for_function(
+        "document.getElementById('run-status').dataset.status === 'succeeded'", timeout=60_000
+    )
+    assert len(seen) >= 2, f"progress never moved: {sorted(seen)}"
+
+
+def test_blank_exercise_is_suggested_confirmed_and_uploading_again_reuses_it(user_page, site):
+    page = user_page
+    # Bad input first: a pain score out of range. What was typed is kept.
+    submit_upload(page, site.url, ABDUCTION, pain_score="11", note="felt fine")
+    assert page.input_value("#id_note") == "felt fine"
+    assert page.is_visible("#choose-again")
+
+    submit_upload(page, site.url, ABDUCTION, pain_score="1")
+    page.wait_for_url("**/confirm/")
+    first_confirm = page.url
+    assert "Shoulder abduction" in page.inner_text("#suggestion")
+    assert page.eval_on_selector("#id_exercise", "s => s.selectedOptions[0].text") == (
+        "Shoulder abduction"
+    )
+
+    # The uploader leaves without confirming and uploads the same file again: not a duplicate.
+    submit_upload(page, site.url, ABDUCTION)
+    page.wait_for_url("**/confirm/")
+    assert page.url == first_confirm, "the waiting upload is reused, not stored twice"
+
+    page.click("button[type=submit]")  # confirm the suggestion
+    page.wait_for_url("**/recordings/*/")
+    assert "/confirm/" not in page.url
+    page.wait_for_function(
+        "document.getElementById('run-status').dataset.status === 'succeeded'", timeout=300_000
+    )
+
+    # Once analysed, the same file again is a duplicate, said in plain words.
+    submit_upload(page, site.url, ABDUCTION)
+    errors = " ".join(page.locator("p.error").all_inner_texts())
+    assert "already uploaded" in errors

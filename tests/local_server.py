@@ -1,0 +1,110 @@
+"""Start the site the way `make run` does, on a free port with a fresh data folder.
+
+`make run` migrates, loads the demo clinic and runs ``python -m workers.local`` (the server and a
+real Celery worker on the filesystem broker). `LocalServer` does the same in a folder of its own,
+so browser tests and `bench/bench_upload.py` exercise the real background worker, never eager
+tasks. Only tests and benchmarks use it.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+class LocalServer:
+    """``with LocalServer(data_dir) as server: server.url`` (set-up commands run first)."""
+
+    def __init__(self, data_dir: Path, *, demo: bool = True, setup: str = "") -> None:
+        self.data_dir = Path(data_dir)
+        self.demo = demo
+        self.setup = setup  # Python run with `manage.py shell -c` after migrating
+        self.port = free_port()
+        self.url = f"http://127.0.0.1:{self.port}"
+        self.log_path = self.data_dir / "server.log"
+        self.process: subprocess.Popen[bytes] | None = None
+        self.extra_env: dict[str, str] = {}  # e.g. a stage delay, so progress can be watched
+
+    def env(self) -> dict[str, str]:
+        env = {k: v for k, v in os.environ.items() if k not in ("REDIS_URL", "DATABASE_URL")}
+        env.update(DATA_DIR=str(self.data_dir), DJANGO_SETTINGS_MODULE="webapp.settings")
+        env.pop("LOCAL_BROKER_DIR", None)
+        env.update(self.extra_env)
+        return env
+
+    def manage(self, *args: str) -> None:
+        with self.log_path.open("ab") as log:
+            subprocess.run(
+                [sys.executable, "manage.py", *args], cwd=ROOT, env=self.env(), check=True,
+                stdout=log, stderr=subprocess.STDOUT,
+            )  # fmt: skip
+
+    def prepare(self) -> None:
+        """What `make run`'s prerequisites do: migrate, then the demo clinic (or `setup`)."""
+        self.data_dir.mkdir(parents=True, exist_ok=True)
+        self.manage("migrate", "--noinput", "-v0")
+        if self.demo:
+            self.manage("load_demo")
+        if self.setup:
+            self.manage("shell", "-c", self.setup)
+
+    def start(self, timeout: float = 120.0) -> None:
+        log = self.log_path.open("ab")
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "workers.local", f"127.0.0.1:{self.port}"],
+            cwd=ROOT, env=self.env(), stdout=log, stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )  # fmt: skip
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.process.poll() is not None:
+                raise RuntimeError(f"the server ended; see {self.log_path}")
+            if self.answers() and self.worker_ready():
+                return
+            time.sleep(0.5)
+        raise TimeoutError(f"the server did not answer in {timeout:.0f} s; see {self.log_path}")
+
+    def answers(self) -> bool:
+        try:
+            with urllib.request.urlopen(f"{self.url}/accounts/login/", timeout=2) as answer:
+                return answer.status == 200
+        except OSError:
+            return False
+
+    def worker_ready(self) -> bool:
+        return b"ready." in self.log_path.read_bytes()
+
+    def stop(self) -> None:
+        """SIGTERM to the launcher (it stops its worker and server), then to its whole group."""
+        if self.process is None:
+            return
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.process.pid, signal.SIGKILL)
+                self.process.wait()
+        self.process = None
+
+    def __enter__(self) -> LocalServer:
+        self.prepare()
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
