@@ -78,6 +78,7 @@ class Step:
     held: int = 0  # sessions whose server state holds every frame sent
     server_p95: float = float("nan")  # frame received -> position event sent, in the server
     server_cpu: float = float("nan")  # processor seconds the server used during the step
+    client_cpu: float = float("nan")  # processor seconds the clients' process used
     sent: int = 0
     seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
@@ -318,8 +319,10 @@ def measure(kind: str, n: int, ctx: Context) -> Step:
     def warmed() -> None:  # processor time from here: imports and model loading are not in it
         cpu[0] = sum(cpu_seconds(p.pid) for p in procs)
 
+    client_cpu = time.process_time()
     try:
         results = asyncio.run(run_clients(bases, world, n, rec, fps, warmed=warmed))
+        step.client_cpu = time.process_time() - client_cpu
         step.server_cpu = sum(cpu_seconds(p.pid) for p in procs) - cpu[0]
     except Exception as error:  # a refused connection or a timeout is a failed step
         step.notes.append(f"{type(error).__name__}: {error}")
@@ -463,7 +466,8 @@ def grow(kind: str, ctx: Context, counts: list[int]) -> list[Step]:
         print(
             row(step),
             f"server p95 {step.server_p95:.1f} ms, server CPU "
-            f"{step.server_cpu:.1f} s = {per_frame:.3f} ms/frame",
+            f"{step.server_cpu:.1f} s = {per_frame:.3f} ms/frame, clients' CPU "
+            f"{step.client_cpu:.1f} s in {step.seconds:.1f} s",
             *step.notes,
             flush=True,
         )

@@ -95,4 +95,4 @@ def test_layers_toggle_and_guidance_markers(page, live_server, analysed_recordin
     assert svg_text("#chart-reps .ytitle") == "score (0–100)"
     assert "time (s)" in page.inner_text(".timeline-axis-title")
     legend = svg_text("#chart-angles .legend")
-    assert "spine · patient" in legend and "Spine" not in legend
+    assert "lower back · your movement" in legend and "Spine" not in legend

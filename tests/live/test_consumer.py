@@ -311,3 +311,40 @@ def test_bad_headers_binary_and_oversized_messages_are_answered(
                                             "bad-message"]  # fmt: skip
     assert all(a["event"] == "error" and a["message"] for a in answers)
     assert position["frame"] == 0
+
+
+def test_a_batch_is_answered_in_one_message_and_a_bad_frame_spoils_only_itself(
+    world, exercise_with_model, short_recording
+):
+    key, created = create_session(world.therapist, world.patient, exercise_with_model)
+    motion = read(short_recording)
+    values = [v.tolist() for v in motion.frames[:12]]
+
+    async def run() -> tuple[list, list, list, dict]:
+        comm = communicator(created["ws"], key)
+        await comm.connect()
+        await comm.send_json_to({"type": "start", "header": header_text(motion)})
+        await comm.receive_json_from(timeout=30)
+        await comm.send_json_to({"type": "frames", "seq": 0, "frames": values[:4]})
+        good = await comm.receive_json_from(timeout=30)
+        bad = [values[4], values[5][:-1], values[6], values[7]]
+        await comm.send_json_to({"type": "frames", "seq": 4, "frames": bad})
+        mixed = await comm.receive_json_from(timeout=30)
+        await comm.send_json_to({"type": "frames", "seq": 20, "frames": values[8:]})
+        ahead = await comm.receive_json_from(timeout=30)
+        await comm.disconnect()
+        again = communicator(created["ws"], key)
+        await again.connect()
+        ready = await again.receive_json_from(timeout=10)
+        await again.disconnect()
+        return good, mixed, ahead, ready
+
+    good, mixed, ahead, ready = async_to_sync(run)()
+    assert isinstance(good, list) and [e["frame"] for e in good] == [0, 1, 2, 3]  # 30 fps
+    assert all(e["event"] == "position" and e["latency_ms"] >= 0 for e in good)
+    assert [(e["code"], e["seq"]) for e in mixed if e["event"] == "error"] == [("value-count", 5)]
+    assert [e["frame"] for e in mixed if e["event"] == "position"] == [4, 5, 6]  # 7 stored
+    assert [(e["code"], e["seq"]) for e in ahead] == [("out-of-order", 20)]
+    assert ready["next_seq"] == 8  # frame 5 used up its number; 20.. refused
+    state = consumers.SESSIONS[created["id"]]
+    assert len(state.frames) == 7 and state.errors == 2
