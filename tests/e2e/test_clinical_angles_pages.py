@@ -67,13 +67,13 @@ def measured(session: str, score: float, involved: list[str]) -> dict:
 
 
 @pytest.fixture
-def clinic(transactional_db, settings, tmp_path):
+def clinic(transactional_db, eager_celery, settings, tmp_path):
+    """With a broker configured (CI sets REDIS_URL) the PDF is made in-process, as in a worker."""
     from django.utils import timezone
 
     from tests.personas import make_exercise, make_recording, make_world
     from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 
-    settings.MEDIA_ROOT = tmp_path / "media"
     world = make_world()
     squat = make_exercise(world.clinic)
     squat.involved_joints = SQUAT_JOINTS
