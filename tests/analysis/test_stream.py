@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import asyncio
 import gzip
-import itertools
 import json
 import socket
 import threading
@@ -15,9 +14,6 @@ import numpy as np
 import pytest
 
 from analysis.bvh import read
-from analysis.dtw import DTWOptions
-from analysis.online.gbdtw import GBDTWOptions
-from analysis.online.gestures import GestureLimits, GestureStream
 from analysis.online.session import LiveSession, RateLimit
 from analysis.online.stream import Source, header_text
 from analysis.pipeline import analyse, build_model, dump_model
@@ -164,25 +160,6 @@ def test_rate_limit_drops_a_flood():
     assert sum(limit.allow() for _ in range(50)) == 5  # the burst, then nothing at t = 0
     now[0] = 1.0
     assert sum(limit.allow() for _ in range(50)) == 5  # refilled to the burst, no more
-
-
-def test_gesture_stream_finds_each_repetition_of_a_gesture():
-    t = np.linspace(0, np.pi, 40)
-    gesture = np.stack([np.sin(t), np.sin(t) ** 2], axis=1)
-    rest = np.zeros((8, 2))
-    reps = [np.interp(np.linspace(0, 39, n), np.arange(40), gesture[:, 0]) for n in (30, 40, 55)]
-    parts = [rest]
-    for r in reps:
-        parts += [np.stack([r, r**2], axis=1), rest]
-    stream = np.vstack(parts)
-    options = GBDTWOptions(confirm_frames=6, dtw=DTWOptions())
-    gs = GestureStream(gesture, options, GestureLimits(20, 120))
-    ended = [g for frame in stream for g in gs.push(frame)]
-    last = gs.finish()
-    ended += [last] if last is not None else []
-    moving = [g for g in ended if stream[g.start : g.end + 1, 0].max() > 0.5]
-    assert len(moving) == 3
-    assert all(a.end + 1 == b.start for a, b in itertools.pairwise(ended))
 
 
 def test_tcp_relay_of_frame_lines(model_path, capsys):

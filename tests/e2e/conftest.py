@@ -33,6 +33,13 @@ def browser():
         browser.close()
 
 
+@pytest.fixture(autouse=True)
+def fast_password_hashing(settings):
+    """The demo users are created and signed in once per test: the production hasher's
+    deliberate slowness would cost seconds each time and is not what these tests look at."""
+    settings.PASSWORD_HASHERS = ["django.contrib.auth.hashers.MD5PasswordHasher"]
+
+
 @pytest.fixture
 def page(browser, live_server):
     context = browser.new_context(viewport={"width": 1280, "height": 1000}, accept_downloads=True)
