@@ -1,4 +1,4 @@
-"""Offline time warping: options, compiled kernels, the readable reference, frame costs with joint
+"""Offline time warping: options, compiled kernels, frame costs with joint
 weights, CMA-ES joint weights, and the alignment and similarity metrics.
 
 Pipeline: repetition scoring aligns each repetition with the tutor's through `align`.

@@ -1,7 +1,7 @@
 """Compiled dynamic programmes behind ``analysis.dtw`` (numba, float64, no fastmath).
 
 Every kernel implements exactly the recurrences written in ``analysis.dtw``'s docstring, with the
-same candidate order and strict ``<`` comparisons as ``analysis.dtw_reference``, so that the
+same candidate order and strict ``<`` comparisons as ``tests/dtw_reference.py``, so that the
 accumulated costs are the same floating-point sums and the paths are the same on untied inputs.
 
 Shared conventions:

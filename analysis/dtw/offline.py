@@ -45,7 +45,7 @@ costs with 16 or more features as one matrix product per block, ``analysis.cost_
 a vectorised anti-diagonal sweep for closed unbanded distances with few features, two rows of
 memory when no path is wanted, and a batched kernel for many queries against one reference
 (``align_batch`` / ``distance_batch``), one slice of queries per core.
-``analysis.dtw_reference`` is the plain version they are tested against.
+``tests/dtw_reference.py`` is the plain version they are tested against.
 """
 
 from __future__ import annotations

@@ -11,9 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from analysis.dtw import offline as dtw
-from analysis.dtw import reference as dtw_reference
 from analysis.dtw.frame_costs import cost_matrix, frame_cost
 from analysis.dtw.offline import Alignment, DTWOptions, align, band_limits, distance
+from tests import dtw_reference
 
 KINDS = ("euclidean", "sqeuclidean", "quaternion", "geodesic")
 
