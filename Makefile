@@ -5,6 +5,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 PORT ?= 8000
 PYTEST_ARGS ?=
+# `make test` spreads the test files over this many processes (pytest-xdist; 0 runs them in this
+# one). Each file stays in one process: its module fixtures (servers, browsers) are made once.
+TEST_WORKERS ?= 2
 
 .PHONY: run worker beat test test-analysis lint format bench bench-browser bench-live fuzz migrate demo clean
 
@@ -48,7 +51,7 @@ beat: deps
 	$(BIN)/celery -A workers beat --loglevel=INFO
 
 test: deps
-	$(BIN)/python -m pytest $(PYTEST_ARGS)
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile $(PYTEST_ARGS)
 
 test-analysis: $(VENV)/.stamp-python
 	$(BIN)/python -m pytest tests/analysis -p no:django $(PYTEST_ARGS)

@@ -88,6 +88,14 @@ class LocalServer:
     def worker_ready(self) -> bool:
         return b"ready." in self.log_path.read_bytes()
 
+    def running(self) -> bool:
+        return self.process is not None and self.process.poll() is None
+
+    def log_tail(self, lines: int = 80) -> str:
+        """The end of the server's and worker's log, for a failing test's message."""
+        text = self.log_path.read_text(errors="replace").splitlines()
+        return "\n".join(text[-lines:])
+
     def stop(self) -> None:
         """SIGTERM to the launcher (it stops its worker and server), then to its whole group."""
         if self.process is None:

@@ -133,9 +133,13 @@ USE_TZ = True
 STATIC_URL = "/static/"
 STATIC_ROOT = Path(os.environ.get("STATIC_ROOT", BASE_DIR / "staticfiles"))
 # three.js comes from the npm registry (package.json) and is served as a static file: no CDN.
+# Only the two folders the pages import from: WhiteNoise indexes every file of these folders
+# each time the middleware starts (every test client), and the whole package holds 1,000 files.
+_THREE = BASE_DIR / "node_modules" / "three"
 STATICFILES_DIRS = [
     BASE_DIR / "webapp" / "static",
-    ("vendor/three", BASE_DIR / "node_modules" / "three"),
+    ("vendor/three/build", _THREE / "build"),
+    ("vendor/three/examples/jsm/controls", _THREE / "examples" / "jsm" / "controls"),
     ("vendor/plotly", Path(__import__("plotly").__file__).parent / "package_data"),
 ]
 WHITENOISE_USE_FINDERS = DEBUG

@@ -1,7 +1,8 @@
 """`make run`: the web server and a real Celery worker beside it, with nothing to install.
 
 ``python -m workers.local [ADDRESS:PORT]`` starts two processes and stops both when it is stopped
-(Ctrl-C, SIGTERM) or when either ends:
+(Ctrl-C, SIGTERM) or when the server ends; a worker that ends on its own (killed, out of memory)
+is started again, up to ``WORKER_RESTARTS`` times, so uploads keep being analysed:
 
 * ``celery -A workers worker -B``: consumes every queue and runs the beat schedule (requeue lost
   runs, refresh the attention list …);
@@ -37,6 +38,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_ADDRESS = "127.0.0.1:8000"
 STOP_SECONDS = 10.0  # a worker finishing its task gets this long before it is killed
+WORKER_RESTARTS = 5  # a worker that keeps dying is a fault to show, not to hide
 
 
 def data_dir(env: Mapping[str, str]) -> Path:
@@ -95,27 +97,54 @@ def stop(process: subprocess.Popen[bytes], *, group: bool) -> None:
         pass
 
 
+def ended_how(process: subprocess.Popen[bytes]) -> str:
+    code = process.returncode
+    return f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
+
+
+def say(message: str) -> None:
+    print(f"workers.local: {message}", file=sys.stderr, flush=True)
+
+
 def serve(address: str, env: Mapping[str, str]) -> int:
-    """Run the worker and the server until one ends or this process is told to stop."""
+    """Run the worker and the server until the server ends or this process is told to stop."""
     env = local_env(env)
-    processes = [start(worker_command(env), env), start(server_command(address), env)]
+    return supervise(worker_command(env), server_command(address), env)
+
+
+def supervise(
+    worker_argv: Sequence[str], server_argv: Sequence[str], env: Mapping[str, str]
+) -> int:
+    """Keep a worker beside the server (restarted when it ends); returns the exit code."""
+    worker = start(worker_argv, env)
+    server = start(server_argv, env)
 
     def on_signal(signum: int, frame: object) -> None:
         raise KeyboardInterrupt
 
-    signal.signal(signal.SIGTERM, on_signal)
+    previous_handler = signal.signal(signal.SIGTERM, on_signal)
     code = 0
+    restarts = 0
     try:
-        while all(p.poll() is None for p in processes):
+        while server.poll() is None:
+            if worker.poll() is not None:
+                if restarts == WORKER_RESTARTS:
+                    say(f"the worker ended ({ended_how(worker)}) {restarts} times; stopping")
+                    code = worker.returncode or 1
+                    break
+                restarts += 1
+                say(f"the worker ended ({ended_how(worker)}); starting it again")
+                worker = start(worker_argv, env)
             time.sleep(0.5)
-        code = next(p.returncode for p in processes if p.returncode is not None)
-        print("workers.local: a process ended; stopping the other", file=sys.stderr)
+        else:
+            code = server.returncode or 0
+            say(f"the server ended ({ended_how(server)}); stopping the worker")
     except KeyboardInterrupt:
         pass
     finally:
-        worker, server = processes
         stop(server, group=True)
         stop(worker, group=False)
+        signal.signal(signal.SIGTERM, previous_handler)
     return code
 
 

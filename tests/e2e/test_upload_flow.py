@@ -72,6 +72,30 @@ def submit_upload(page, url: str, path: Path, exercise: str = "", **fields: str)
     return time.perf_counter() - start
 
 
+READ_STATUS = """() => {
+  const box = document.getElementById("run-status");
+  const bar = box.querySelector(".progress");
+  return [box.dataset.status, bar ? bar.getAttribute("aria-valuenow") : null];
+}"""
+
+
+def watch_until_succeeded(page, site: LocalServer, seconds: float = 360) -> set[int]:
+    """Poll the recording page's status (it updates itself) until the analysis succeeds; returns
+    the progress values seen. A failed run, a stopped server or the time running out fails the
+    test with the end of the server's and worker's log, so a CI failure says what happened."""
+    seen: set[int] = set()
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        assert site.running(), "the server stopped:\n" + site.log_tail()
+        status, progress = page.evaluate(READ_STATUS)
+        if status == "succeeded":
+            return seen
+        assert status != "failed", "the analysis failed:\n" + site.log_tail()
+        seen.add(int(progress or 0))
+        page.wait_for_timeout(400)
+    raise AssertionError(f"not done after {seconds:.0f} s (status {status}):\n" + site.log_tail())
+
+
 def test_upload_answers_at_once_and_progress_moves_to_done(user_page, site):
     page = user_page
     seconds = submit_upload(page, site.url, SQUAT, exercise="Deep squat", pain_score="2")
@@ -86,18 +110,7 @@ def test_upload_answers_at_once_and_progress_moves_to_done(user_page, site):
     assert "Deep squat" in page.inner_text("#active-list")
 
     page.goto(recording_url)
-    seen = set()
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline:
-        status = page.get_attribute("#run-status", "data-status")
-        if status == "succeeded":
-            break
-        value = page.get_attribute("#run-status .progress", "aria-valuenow")
-        seen.add(int(value or 0))
-        page.wait_for_timeout(400)
-    page.wait_for_function(
-        "document.getElementById('run-status').dataset.status === 'succeeded'", timeout=60_000
-    )
+    seen = watch_until_succeeded(page, site)
     assert len(seen) >= 2, f"progress never moved: {sorted(seen)}"
 
 
@@ -124,9 +137,7 @@ def test_blank_exercise_is_suggested_confirmed_and_uploading_again_reuses_it(use
     page.click("button[type=submit]")  # confirm the suggestion
     page.wait_for_url("**/recordings/*/")
     assert "/confirm/" not in page.url
-    page.wait_for_function(
-        "document.getElementById('run-status').dataset.status === 'succeeded'", timeout=300_000
-    )
+    watch_until_succeeded(page, site)
 
     # Once analysed, the same file again is a duplicate, said in plain words.
     submit_upload(page, site.url, ABDUCTION)

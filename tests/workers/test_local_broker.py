@@ -4,11 +4,13 @@ broker in the data folder; without it (tests, manage.py) tasks stay eager; Redis
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
-from workers.local import local_env, server_command, worker_command
+from workers.local import local_env, server_command, supervise, worker_command
 
 ROOT = Path(__file__).resolve().parents[2]
 SHOW = (
@@ -62,3 +64,30 @@ def test_worker_consumes_every_queue_with_beat_and_the_server_is_runserver(tmp_p
     assert "-Q" not in command, "no -Q: every queue (analyses, models, reports)"
     assert f"--schedule={tmp_path / 'celerybeat-schedule'}" in command
     assert server_command("127.0.0.1:9")[-2:] == ["runserver", "127.0.0.1:9"]
+
+
+def test_a_worker_that_dies_is_started_again_and_the_server_ending_stops_all(tmp_path):
+    """The launcher's supervision with two small programs in place of Celery and runserver: the
+    first worker dies at once (as under the out-of-memory killer), the second keeps running; the
+    server ends after a few seconds, which stops the worker and the launcher."""
+    starts = tmp_path / "starts"
+    worker = (
+        "import pathlib, sys, time\n"
+        f"p = pathlib.Path({str(starts)!r})\n"
+        "n = int(p.read_text()) if p.exists() else 0\n"
+        "p.write_text(str(n + 1))\n"
+        "sys.exit(9) if n == 0 else time.sleep(120)\n"
+    )
+    server = "import time; time.sleep(4)"
+    code = supervise([sys.executable, "-c", worker], [sys.executable, "-c", server], os.environ)
+    assert code == 0
+    assert starts.read_text() == "2", "the dead worker was started once more"
+
+
+def test_a_worker_that_keeps_dying_stops_the_launcher_with_its_code(tmp_path):
+    server = "import time; time.sleep(120)"
+    dying = [sys.executable, "-c", "import sys; sys.exit(7)"]
+    started = time.monotonic()
+    code = supervise(dying, [sys.executable, "-c", server], os.environ)
+    assert code == 7
+    assert time.monotonic() - started < 60, "the server was stopped, not waited for"
