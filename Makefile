@@ -72,8 +72,9 @@ bench: $(VENV)/.stamp-bench
 
 # Concurrent live sessions at 120 frames/s under `make run`'s server and Daphne with the Redis
 # channel layer (Redis on 127.0.0.1:6379), then the live sessions against the offline analysis.
-bench-live: $(VENV)/.stamp-python
-	$(BIN)/python -m bench.bench_live --markdown docs/sections/bench_live.md
+bench-live: $(VENV)/.stamp-bench
+	$(BIN)/python -m bench.bench_live --servers runserver,redis,uvicorn --counts 20,35,50,70 \
+		--seconds 8 --batch 3 --markdown docs/sections/bench_live.md
 	$(BIN)/python -m bench.eval_live --jobs 2 --markdown docs/sections/eval_live.md
 	$(BIN)/python docs/assemble.py
 

@@ -9,7 +9,10 @@ created through ``POST /api/v1/live-sessions/``, against a real server process:
 - ``redis``: the ASGI server Daphne on ``webapp.asgi:application`` with the Redis channel layer
   (``REDIS_URL=redis://127.0.0.1:6379/<db>``), SQLite; ``--processes P`` runs P Daphne
   processes, each on its own port, and the clients spread their sessions over them (a session's
-  connections all go to one process: its aligner lives there), as a sticky load balancer would.
+  connections all go to one process: its aligner lives there), as a sticky load balancer would;
+- ``uvicorn``: the same with the ASGI server Uvicorn (uvloop, the websockets library, no
+  per-message compression: frames of numbers on a clinic's network need the processor more
+  than the bandwidth), ``--processes P`` likewise.
 
 ``--batch K`` sends K frames per message (``{"type": "frames", ...}``, as ``python -m analysis
 stream --server`` does: 3 at 120 frames/s); the latency of every frame of a batch is counted
@@ -24,7 +27,7 @@ aligned frame answered, and the server holding every frame sent (its ``ready`` e
 p95 passes 50 ms or a frame is lost; the table gives each step and the largest N that passed.
 The clients run in one process on the same machine as the server.
 
-    .venv/bin/python -m bench.bench_live [--servers runserver,redis] [--counts 10,20,35,50]
+    .venv/bin/python -m bench.bench_live [--servers runserver,redis,uvicorn] [--counts 10,20,35]
         [--seconds 10] [--batch 3] [--processes 2] [--redis-db 14] [--markdown FILE]
 
 ``--aligner`` also prints the in-process aligner's time per frame (``stream --model``).
@@ -135,6 +138,10 @@ def free_port() -> int:
 def start_server(kind: str, env: dict[str, str], port: int, log: Path) -> subprocess.Popen:
     if kind == "runserver":
         argv = [sys.executable, "manage.py", "runserver", f"127.0.0.1:{port}", "--noreload"]
+    elif kind == "uvicorn":
+        argv = [sys.executable, "-m", "uvicorn", "webapp.asgi:application", "--host", "127.0.0.1",
+                "--port", str(port), "--log-level", "warning", "--no-access-log",
+                "--ws-per-message-deflate", "false", "--ws-max-size", str(1 << 20)]  # fmt: skip
     else:
         argv = [sys.executable, "-m", "daphne", "-b", "127.0.0.1", "-p", str(port),
                 "-v", "0", "webapp.asgi:application"]  # fmt: skip
@@ -244,7 +251,9 @@ async def client(url: str, token: str, rec: Recording120, fps: float, begin: flo
                         result.errors += 1
 
         reader = asyncio.create_task(receive())
-        phase = random.random() / fps  # clients are not in step with each other
+        # clients are not in step with each other: each sends its messages at its own phase of
+        # the message period (a batch's frame times), as independent capture systems would
+        phase = random.random() * rec.batch / fps
         for first, message in rec.messages:
             last = min(first + rec.batch, len(rec.frames)) - 1
             delay = begin + phase + last / fps - time.perf_counter()
@@ -299,7 +308,7 @@ class Context:
 
 
 def label(kind: str, ctx: Context) -> str:
-    name = "runserver" if kind == "runserver" else "Daphne + Redis"
+    name = {"runserver": "runserver", "uvicorn": "Uvicorn + Redis"}.get(kind, "Daphne + Redis")
     if ctx.processes > 1 and kind != "runserver":
         name += f", {ctx.processes} processes"
     return f"{name}, {ctx.rec.batch} frame{'s' if ctx.rec.batch > 1 else ''}/message"
@@ -364,9 +373,9 @@ def report(steps: list[Step], args: argparse.Namespace, load: str) -> str:
         "## Concurrent live sessions",
         "",
         f"Measured {dt.date.today().isoformat()} on the project's VM ({machine()}, Python "
-        f"{platform.python_version()}); the machine was shared "
-        f"with other sessions' work while it ran (load average {load} before the run). Clients "
-        "and server on the same machine, over loopback.",
+        f"{platform.python_version()}); load average {load} before the run. Clients "
+        "and server on the same machine, over loopback; clients start at random phases of "
+        "the message period, as independent capture systems would.",
         f"Command: `.venv/bin/python -m bench.bench_live --servers {args.servers} --counts "
         f"{args.counts} --seconds {args.seconds:g} --batch {args.batch} --processes "
         f"{args.processes}`.",
@@ -414,13 +423,13 @@ def aligner_times() -> None:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--servers", default="runserver,redis")
+    parser.add_argument("--servers", default="runserver,redis,uvicorn")
     parser.add_argument("--counts", default="10,20,35,50,70,100")
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--fps", type=float, default=120.0)
     parser.add_argument("--redis-db", type=int, default=14)
     parser.add_argument("--batch", default="1,3", help="frames per message, e.g. 1,3")
-    parser.add_argument("--processes", default="1,2", help="Daphne processes (redis), e.g. 1,2")
+    parser.add_argument("--processes", default="1,2", help="server processes (redis, uvicorn)")
     parser.add_argument("--markdown", type=Path)
     parser.add_argument("--aligner", action="store_true")
     args = parser.parse_args(argv)
@@ -429,7 +438,7 @@ def main(argv: list[str] | None = None) -> None:
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
     steps: list[Step] = []
     for kind in args.servers.split(","):
-        redis_url = f"redis://127.0.0.1:6379/{args.redis_db}" if kind == "redis" else None
+        redis_url = None if kind == "runserver" else f"redis://127.0.0.1:6379/{args.redis_db}"
         with tempfile.TemporaryDirectory(prefix=f"bench-live-{kind}-") as tmp:
             folder = Path(tmp)
             env = server_env(folder, redis_url)

@@ -141,9 +141,10 @@ class RepetitionCounter:
         """medfilt's value at frame j (zeros outside the stream, as scipy pads)."""
         raw = self.raw.values
         lo, hi = j - self._half, j + self._half + 1
-        window = raw[max(lo, 0) : hi]
-        pad = max(0, -lo) + max(0, hi - raw.size)
-        return float(np.median(np.concatenate([window, np.zeros(pad)]) if pad else window))
+        window = raw[max(lo, 0) : hi].tolist()
+        window += [0.0] * (max(0, -lo) + max(0, hi - raw.size))
+        # an odd count (2 half + 1): the middle value; sorting a short list beats np.median
+        return float(sorted(window)[self._half])
 
     def _smooth_at(self, k: int) -> float:
         """The Hann window's value at frame k (edge values repeated, as offline)."""

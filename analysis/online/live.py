@@ -78,6 +78,7 @@ class LiveAligner:
         mapping = map_joints(model.joint_names, skeleton.names)
         self._index = [skeleton.names.index(mapping[n]) for n in model.joint_names]
         self._kinematics = FrameKinematics(skeleton)
+        self.n_channels = skeleton.n_channels  # values per stream frame
         self._parents = skeleton.parents
         self._period = max(1.0, fps / model.fps)  # stream frames per model frame
         self._due = 0.0
@@ -137,11 +138,11 @@ class LiveAligner:
 
     def push(self, values: npt.ArrayLike) -> list[Event]:
         """Add one stream frame (its C channel values); return the events it produced."""
-        started, cpu = time.perf_counter(), time.thread_time()
         seq = self.frames
         self.frames += 1
-        if seq < self._due:
+        if seq < self._due:  # thinned to the model's frame rate: nothing to time or answer
             return []
+        started, cpu = time.perf_counter(), time.thread_time()
         self._due += self._period
         q = self._features(np.asarray(values, dtype=np.float64))
         self._frame_of.append(seq)

@@ -103,7 +103,7 @@ def parse_values(raw: Any, n_channels: int, seq: int) -> FloatArray:
     except (TypeError, ValueError):
         text = f"frame {seq} holds a value that is not a number"
         raise ProtocolError("not-a-number", text, seq) from None
-    if not np.all(np.isfinite(values)):
+    if not np.isfinite(values).all():
         raise ProtocolError("not-finite", f"frame {seq} holds NaN or infinite values", seq)
     return values
 
@@ -226,7 +226,7 @@ class LiveSession:
     def _take(self, raw: Any, seq: int) -> list[Event]:
         """Check one frame's values and the limits, keep it, align it."""
         assert self.motion is not None and self.aligner is not None
-        values = parse_values(raw, self.motion.skeleton.n_channels, seq)
+        values = parse_values(raw, self.aligner.n_channels, seq)
         if (len(self.frames) + 1) * values.size > MAX_VALUES:
             raise ProtocolError("too-long", "the session holds as many frames as it can: end it")
         if not self.limit.allow():
