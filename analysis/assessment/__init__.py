@@ -1,10 +1,9 @@
-"""Assessment: repetition scores, per-joint levels at each key pose, guidance, performance level.
+"""Assessment: repetition scores, per-joint levels at each key pose, performance level.
 
 Pipeline: after the repetitions are found, each is scored (`repetition_features`, the model's
 scorer), each key pose is assessed per joint, and the patient's level per joint is updated.
 """
 
-from analysis.assessment.guidance import guidance_for
 from analysis.assessment.joints import (
     LandmarkAssessor,
     ThresholdAssessor,
@@ -20,7 +19,6 @@ __all__ = [
     "RepetitionScorer",
     "ThresholdAssessor",
     "fit_scorer",
-    "guidance_for",
     "joint_relevance",
     "landmark_features",
     "repetition_features",

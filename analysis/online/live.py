@@ -11,8 +11,10 @@ Per frame (O(m) work, m the tutor repetition's length):
   along the tutor's movement axis, a fraction of a second behind the newest frame (the
   look-ahead its filters need), so the live count is the count the offline analysis gives.
   Each repetition is then aligned with the tutor's gesture by GB-DTW (paper 001: its score and
-  Table 1's guidance), scored by the exercise model's scorer (as the offline pipeline does)
-  and given guidance.
+  Table 1's guidance, ``gesture_guidance``), scored by the exercise model's scorer and given
+  the guidance the offline pipeline gives (``guidance``: Table 1 on the repetition's WOOE-DTW
+  alignment with a tutor repetition, `analysis.pipeline.gestures`), so a patient hears live
+  what the recording's page later says.
 
 Frames are the recording's own BVH channel values; joints are mapped onto the model's once, and
 a stream faster than the model's frame rate is thinned to it (slower streams are used as is).
@@ -27,7 +29,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from analysis.assessment import guidance_for, repetition_features
+from analysis.assessment import repetition_features
 from analysis.bvh import Skeleton, map_joints
 from analysis.dtw import DTWOptions
 from analysis.kinematics import flatten, positions, relative_to_start
@@ -37,8 +39,10 @@ from analysis.online.aligners import ForwardPlotAligner, ForwardPlotOptions, Ope
 from analysis.online.counting import Counted, RepetitionCounter
 from analysis.online.frames import FrameKinematics
 from analysis.online.gbdtw import GBDTWOptions, _gesture
+from analysis.pipeline.gestures import align_gesture, guidance
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import mirrored
+from analysis.pipeline.repetition_stage import RULES
 
 FloatArray = npt.NDArray[np.float64]
 Event = dict[str, Any]
@@ -91,6 +95,8 @@ class LiveAligner:
         self._frame_of: list[int] = []  # model-rate frame -> stream frame
         self._progress: tuple[list[float], list[float]] = ([], [])  # as performed, mirrored
         self._q: tuple[list[FloatArray], list[FloatArray]] = ([], [])
+        self._gesture_q: list[FloatArray] = []  # (J, 4) per model-rate frame, for guidance
+        self._gesture_joints = list(model.components.papers.joint_index)
         # repetitions are counted on the side the patient uses (mirror image: side 1)
         self._counter = RepetitionCounter(model.components.axis.rep_frames)
         self._side = 0
@@ -237,6 +243,8 @@ class LiveAligner:
             self._progress[side].append(value)
             low, high = self._span[side]
             self._span[side] = (min(low, value), max(high, value))
+        # the rotations offline guidance aligns: as performed, whichever side is used
+        self._gesture_q.append(rot[0, self._index][self._gesture_joints])
         direct, flipped = self._joint_quaternions(rot)
         self._q[0].append(direct[0])
         self._q[1].append(flipped[0])
@@ -276,8 +284,6 @@ class LiveAligner:
         reach = float(progress.max() - progress[0])
         start, end = self._frame_of[a], self._frame_of[b]
         tempo = (b - a + 1) / self._tutor_q.shape[0]
-        kind = guidance_for(tempo, reach)
-        guidance = [{"type": kind, "frames": [start, end], "text": GUIDANCE_TEXT.get(kind, "")}]
         user = np.asarray(self._q[side][a : b + 1])
         gesture = _gesture(self._tutor_q, user, user, index=len(self.repetitions), a0=0, u0=a,
                            opt=self._gb)  # fmt: skip
@@ -287,13 +293,37 @@ class LiveAligner:
             "start": start,
             "end": end,
             "score": round(self._score(a, b, side), 2),
-            "guidance": guidance if kind else [],
+            "guidance": self._guidance(a, b, side, len(self.repetitions)),
             "gesture_guidance": list(gesture.guidance),
             "reach": round(reach, 3),
             "tempo": round(tempo, 3),
         }
         self.repetitions.append(event)
         return event
+
+    def _guidance(self, a: int, b: int, side: int, index: int) -> list[Event]:
+        """Table 1's guidance for model-rate frames a..b, by the offline pipeline's own rule
+        (`analysis.pipeline.gestures.guidance` on the repetition's WOOE-DTW alignment with a
+        tutor repetition), most pressing first, with the stream frames it concerns."""
+        parts = self.model.components
+        papers, step = parts.papers, parts.scoring_step
+        reps = parts.tutor_reps or [(self.tutor_start, self.tutor_end)]
+        t0, t1 = reps[index % len(reps)]  # offline's choice when no key pose pairs them
+        patient_q = np.asarray(self._gesture_q[a : b + 1 : step])
+        aligned = align_gesture(papers.tutor_q[t0 : t1 + 1 : step], patient_q, papers.joint_weights)
+        tutor_progress = papers.tutor_progress[t0 : t1 + 1 : step]
+        progress = np.asarray(self._progress[side][a : b + 1 : step])
+        found = guidance(
+            aligned, progress - progress[0], float(tutor_progress.max() - tutor_progress[0]), RULES
+        )
+        return [
+            {
+                "type": g.type,
+                "frames": [self._frame_of[min(b, a + step * f)] for f in g.frames],
+                "text": GUIDANCE_TEXT.get(g.type, ""),
+            }
+            for g in found
+        ]
 
     def _score(self, a: int, b: int, side: int) -> float:
         """The exercise model's repetition score of model-rate frames a..b (0-100), scored as

@@ -317,3 +317,32 @@ def test_client_sends_batches_and_resumes_after_a_dropped_connection(model, caps
     printed = events_of(capsys.readouterr().out)
     frames = [e["frame"] for e in printed if e["event"] == "position"]
     assert frames == sorted(set(frames))  # each position once, in order
+
+
+def test_live_guidance_is_the_offline_pipelines_rule(model):
+    """Each live repetition gets the guidance the offline pipeline's gesture stage gives the same
+    frames (Table 1 on the WOOE-DTW alignment with a tutor repetition), not a rule of its own:
+    the stage run on the whole recording with the live repetitions' spans says the same, though
+    the live side computed it frame by frame from the stream."""
+    from analysis.landmarks.segmentation import Segments
+    from analysis.online.live import LiveAligner
+    from analysis.pipeline.prepare import prepare, progress_signal
+    from analysis.pipeline.repetition_stage import Synchronised, gesture_results
+
+    motion = read(SESSION)
+    aligner = LiveAligner(model, motion.skeleton, motion.fps)
+    for values in motion.frames:
+        aligner.push(values)
+    aligner.finish()
+    reps = aligner.repetitions
+    live = [[g["type"] for g in r["guidance"]] for r in reps]
+    assert model.fps == motion.fps, "stream frames are the model's frames here"
+
+    parts = model.components
+    prepared = prepare(motion, model.tutor.skeleton, model.fps, parts.axis.rep_frames)
+    progress, _ = progress_signal(prepared, parts.axis, parts.mirror)
+    spans = Segments(*(np.array([r[k] for r in reps]) for k in ("start", "end", "end")))
+    offline = gesture_results(prepared, spans, progress, Synchronised({}, None), model)
+    assert live == [[g.type for g in result.guidance] for result in offline]
+    assert any(live), "the session needs guidance for the test to say anything"
+    assert all(g["text"] for r in reps for g in r["guidance"]), "words for the patient"
