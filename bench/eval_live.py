@@ -67,6 +67,8 @@ class SessionResult:
     latencies_ms: np.ndarray  # per frame, wall time
     cpu_ms: np.ndarray  # per frame, processor time of the aligner's thread
     seconds: float
+    tips_equal: int  # repetitions whose first tip (or none) is the offline analysis's
+    tips_compared: int  # repetitions compared (the first min(live, offline) of each)
 
 
 def tutor_model(data: Path, exercise: str) -> FittedModel:
@@ -111,6 +113,9 @@ def run_session(model: FittedModel, path: Path) -> SessionResult:
         tutor_frames[e["frame"]] = e["tutor_frame"]
     offline = analyse(read(path), model).summary
     deviation = playback_deviation(model, path, tutor_frames, offline)
+    live_tips = [r["guidance"][:1] for r in events if r["event"] == "repetition"]
+    pairs = list(zip(live_tips, offline.repetitions, strict=False))
+    same = sum([g["type"] for g in tip] == [g.type for g in rep.guidance[:1]] for tip, rep in pairs)
     return SessionResult(
         name=path.name,
         live=int(events[-1]["repetitions"]),
@@ -119,6 +124,8 @@ def run_session(model: FittedModel, path: Path) -> SessionResult:
         latencies_ms=np.array([e["latency_ms"] for e in positions]),
         cpu_ms=np.array([e["cpu_ms"] for e in positions]),
         seconds=seconds,
+        tips_equal=same,
+        tips_compared=len(pairs),
     )
 
 
@@ -160,6 +167,8 @@ def table(results: dict[str, list[SessionResult]]) -> tuple[str, dict[str, float
         "p50": float(np.percentile(np.concatenate([r.cpu_ms for r in every]), 50)),
         "wall95": float(np.percentile(np.concatenate([r.latencies_ms for r in every]), 95)),
         "wall50": float(np.percentile(np.concatenate([r.latencies_ms for r in every]), 50)),
+        "tips_equal": float(sum(r.tips_equal for r in every)),
+        "tips_compared": float(sum(r.tips_compared for r in every)),
     }
     lines.append(
         f"| **all** | {len(every)} | {totals['equal']:.1%} | {totals['near']:.1%} | "
@@ -178,6 +187,19 @@ def verdicts(t: dict[str, float]) -> str:
          f"shared machine: p95 {t['wall95']:.3f} ms, p50 {t['wall50']:.3f} ms", t["p95"] <= 2.0),
     ]  # fmt: skip
     return "\n".join(f"- {'met' if ok else 'NOT met'}: {text}" for text, ok in checks)
+
+
+def guidance_line(t: dict[str, float]) -> str:
+    """How often the live guidance is what the recording's page says afterwards."""
+    share = t["tips_equal"] / max(t["tips_compared"], 1.0)
+    return (
+        "Guidance: the first tip of a live repetition (or none) is the offline analysis's for "
+        f"the same repetition on {t['tips_equal']:.0f} of {t['tips_compared']:.0f} repetitions "
+        f"({share:.1%}). Both apply the same rule (`analysis.pipeline.gestures.guidance`); "
+        "they differ where the live repetition ends at the trough after the movement and the "
+        "offline one runs on to the next start (a tempo tip), or where the offline analysis "
+        "pairs the repetition with another tutor repetition by its key poses."
+    )
 
 
 def main(argv: list[str] | None = None) -> str:
@@ -203,7 +225,8 @@ def main(argv: list[str] | None = None) -> str:
         "## Live sessions against the offline analysis",
         "",
         f"Measured {dt.date.today().isoformat()} on the project's VM ({machine()}, Python "
-        f"{platform.python_version()}), shared with other sessions' work while it ran, "
+        f"{platform.python_version()}), load average "
+        f"{', '.join(f'{v:.1f}' for v in os.getloadavg())} after the run, "
         f"{args.jobs} worker processes, {time.perf_counter() - started:.0f} s.",
         "Command: `.venv/bin/python -m bench.eval_live --jobs "
         f"{args.jobs} --markdown docs/sections/eval_live.md`.",
@@ -221,6 +244,8 @@ def main(argv: list[str] | None = None) -> str:
         verdicts(totals),
         "",
         "Sessions whose live count differs: " + ("; ".join(differs) or "none") + ".",
+        "",
+        guidance_line(totals),
     ])  # fmt: skip
     print(text)
     if args.markdown:
