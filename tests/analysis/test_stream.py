@@ -184,23 +184,28 @@ def test_tcp_relay_of_frame_lines(model_path, capsys):
     assert events_of(capsys.readouterr().out)[-1]["frames"] == len(frames)
 
 
-def test_client_resumes_after_a_dropped_connection(model, capsys):
-    """A fake server that drops the first connection after 30 frames: nothing is lost."""
+def stream_through_a_dropping_server(session: LiveSession, motion, batch: int | None = None):
+    """Stream ``motion`` with `stream_to` to a fake server that answers with ``session`` and drops
+    the first connection once it holds 30 frames; returns the client's summary, the connections
+    and the type of every message the server read."""
     from websockets.asyncio.server import serve
 
     from analysis.online.remote import stream_to
 
-    path = DATA / "reps/m07_s01_e02.bvh.gz"
-    motion = read(path)
-    session = LiveSession(model)
-    connections = []
+    connections, kinds = [], []
 
     async def handler(ws) -> None:
         connections.append(ws)
         async for raw in ws:
-            for event in session.handle(json.loads(raw)):
-                await ws.send(json.dumps(event))
-            if len(connections) == 1 and session.next_seq == 30:
+            message = json.loads(raw)
+            kinds.append(message["type"])
+            events = session.handle(message)
+            if message["type"] == "frames" and events:
+                await ws.send(json.dumps(events))  # a batch's events in one message
+            else:
+                for event in events:
+                    await ws.send(json.dumps(event))
+            if len(connections) == 1 and session.next_seq >= 30:
                 await ws.close()
                 return
 
@@ -208,9 +213,16 @@ def test_client_resumes_after_a_dropped_connection(model, capsys):
         async with serve(handler, "127.0.0.1", 0) as server:
             port = server.sockets[0].getsockname()[1]
             source = Source(header_text(motion), motion.frame_time, iter(motion.frames))
-            return await stream_to(f"ws://127.0.0.1:{port}/", "token", source)
+            return await stream_to(f"ws://127.0.0.1:{port}/", "token", source, batch=batch)
 
-    summary = asyncio.run(run())
+    return asyncio.run(run()), connections, kinds
+
+
+def test_client_resumes_after_a_dropped_connection(model, capsys):
+    """A fake server that drops the first connection after 30 frames: nothing is lost."""
+    motion = read(DATA / "reps/m07_s01_e02.bvh.gz")
+    session = LiveSession(model)
+    summary, connections, _ = stream_through_a_dropping_server(session, motion)
     assert len(connections) == 2
     assert summary["frames"] == motion.n_frames
     assert np.array_equal(np.vstack(session.frames), motion.frames)
@@ -282,35 +294,9 @@ def test_default_batch_adds_at_most_25_ms():
 
 
 def test_client_sends_batches_and_resumes_after_a_dropped_connection(model, capsys):
-    from websockets.asyncio.server import serve
-
-    from analysis.online.remote import stream_to
-
     motion = read(DATA / "reps/m07_s01_e02.bvh.gz")
-    session, connections, kinds = LiveSession(model), [], []
-
-    async def handler(ws) -> None:
-        connections.append(ws)
-        async for raw in ws:
-            message = json.loads(raw)
-            kinds.append(message["type"])
-            events = session.handle(message)
-            if message["type"] == "frames" and events:
-                await ws.send(json.dumps(events))  # a batch's events in one message
-            else:
-                for event in events:
-                    await ws.send(json.dumps(event))
-            if len(connections) == 1 and session.next_seq >= 30:
-                await ws.close()
-                return
-
-    async def run() -> dict:
-        async with serve(handler, "127.0.0.1", 0) as server:
-            port = server.sockets[0].getsockname()[1]
-            source = Source(header_text(motion), motion.frame_time, iter(motion.frames))
-            return await stream_to(f"ws://127.0.0.1:{port}/", "token", source, batch=4)
-
-    summary = asyncio.run(run())
+    session = LiveSession(model)
+    summary, connections, kinds = stream_through_a_dropping_server(session, motion, batch=4)
     assert len(connections) == 2 and kinds.count("frames") >= motion.n_frames // 4 - 2
     assert summary["frames"] == motion.n_frames
     assert np.array_equal(np.vstack(session.frames), motion.frames)
