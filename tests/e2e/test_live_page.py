@@ -10,6 +10,7 @@ server; pytest-django's live server speaks WSGI only).
 from __future__ import annotations
 
 import asyncio
+import re
 import threading
 from pathlib import Path
 
@@ -89,10 +90,12 @@ def test_streamed_session_counts_on_the_live_page(server, browser):
         page.wait_for_function(
             "() => document.getElementById('guidance').textContent.trim().length > 0"
         )
+        # Which repetition's words are on screen depends on how fast the machine is; each is
+        # either a numbered "well done" or one of the guidance tips.
         guidance = page.inner_text("#guidance")
-        assert "Repetition 1" in guidance or any(
+        assert re.search(r"Repetition \d+: well done", guidance) or any(
             tip in guidance for tip in ("Slow down", "faster", "Not so far", "Go further")
-        )
+        ), guidance
         thread.join(timeout=120)
         assert out["summary"]["repetitions"] == expected
         page.wait_for_function(

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
+from playwright.sync_api import Error as PlaywrightError
 
 from tests.local_server import LocalServer
 from tests.personas import PASSWORD
@@ -74,9 +75,24 @@ def submit_upload(page, url: str, path: Path, exercise: str = "", **fields: str)
 
 READ_STATUS = """() => {
   const box = document.getElementById("run-status");
+  if (!box) return [null, null];
   const bar = box.querySelector(".progress");
   return [box.dataset.status, bar ? bar.getAttribute("aria-valuenow") : null];
 }"""
+
+
+def read_status(page) -> tuple[str | None, str | None]:
+    """The status box's state; the page reloads itself when the run ends, and a read that meets
+    the reload is made again on the new page."""
+    for _ in range(5):
+        try:
+            page.wait_for_load_state("load")
+            return tuple(page.evaluate(READ_STATUS))
+        except PlaywrightError as error:
+            if "context was destroyed" not in str(error) and "navigat" not in str(error):
+                raise
+            page.wait_for_timeout(200)
+    raise AssertionError("the recording page kept navigating")
 
 
 def watch_until_succeeded(page, site: LocalServer, seconds: float = 360) -> set[int]:
@@ -87,7 +103,7 @@ def watch_until_succeeded(page, site: LocalServer, seconds: float = 360) -> set[
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
         assert site.running(), "the server stopped:\n" + site.log_tail()
-        status, progress = page.evaluate(READ_STATUS)
+        status, progress = read_status(page)
         if status == "succeeded":
             return seen
         assert status != "failed", "the analysis failed:\n" + site.log_tail()
