@@ -42,7 +42,6 @@ import json
 import os
 import platform
 import random
-import socket
 import subprocess
 import sys
 import tempfile
@@ -53,6 +52,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from bench.nginx_proxy import free_port, start_proxy
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "data" / "ui-prmd"
@@ -129,19 +130,18 @@ def setup_world(env: dict[str, str]) -> dict[str, str]:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def start_server(kind: str, env: dict[str, str], port: int, log: Path) -> subprocess.Popen:
     if kind == "runserver":
         argv = [sys.executable, "manage.py", "runserver", f"127.0.0.1:{port}", "--noreload"]
     elif kind == "uvicorn":
         argv = [sys.executable, "-m", "uvicorn", "webapp.asgi:application", "--host", "127.0.0.1",
                 "--port", str(port), "--log-level", "warning", "--no-access-log",
-                "--ws-per-message-deflate", "false", "--ws-max-size", str(1 << 20)]  # fmt: skip
+                "--ws-per-message-deflate", "false", "--ws-max-size", str(1 << 20),
+                # after a run its Channels tasks keep it waiting past the 20 s stop_server allows
+                "--timeout-graceful-shutdown", "3"]  # fmt: skip
+    elif kind == "gunicorn":  # pages and the API as docker-compose's `web` serves them (WSGI)
+        argv = [sys.executable, "-m", "gunicorn", "webapp.wsgi:application", "--bind",
+                f"127.0.0.1:{port}", "--workers", "2"]  # fmt: skip
     else:
         argv = [sys.executable, "-m", "daphne", "-b", "127.0.0.1", "-p", str(port),
                 "-v", "0", "webapp.asgi:application"]  # fmt: skip
@@ -281,11 +281,14 @@ async def run_clients(
     fps: float,
     *,
     warmed: Callable[[], None],
+    processes: list[str] | None = None,
 ) -> list[ClientResult]:
+    """N sessions spread over ``bases``, after one unmeasured short session on each of the
+    ``processes`` (``bases`` unless given: a proxy's processes are warmed directly)."""
     token = world["token"]
     # one short session per process first, unmeasured: it loads the model and compiled kernels
     warm = Recording120(rec.header, rec.frames[: int(fps)], rec.batch)
-    for base in bases:
+    for base in processes or bases:
         url = base.replace("http://", "ws://") + create_session(base, world)
         await client(url, token, warm, fps, time.perf_counter())
     warmed()
@@ -305,17 +308,20 @@ class Context:
     fps: float
     folder: Path
     processes: int = 1
+    proxy: bool = False  # through docker-compose's nginx proxy (deploy/), 2 processes
 
 
 def label(kind: str, ctx: Context) -> str:
     name = {"runserver": "runserver", "uvicorn": "Uvicorn + Redis"}.get(kind, "Daphne + Redis")
     if ctx.processes > 1 and kind != "runserver":
         name += f", {ctx.processes} processes"
+    if ctx.proxy:
+        name += " behind nginx"
     return f"{name}, {ctx.rec.batch} frame{'s' if ctx.rec.batch > 1 else ''}/message"
 
 
 def measure(kind: str, n: int, ctx: Context) -> Step:
-    env, world, rec, fps = ctx.env, ctx.world, ctx.rec, ctx.fps
+    env, rec, fps = ctx.env, ctx.rec, ctx.fps
     logs = ctx.folder.parent / "bench-live-logs"  # kept after the run
     logs.mkdir(exist_ok=True)
     count = 1 if kind == "runserver" else ctx.processes
@@ -330,7 +336,7 @@ def measure(kind: str, n: int, ctx: Context) -> Step:
 
     client_cpu = time.process_time()
     try:
-        results = asyncio.run(run_clients(bases, world, n, rec, fps, warmed=warmed))
+        results = asyncio.run(clients_of(bases, ctx, n, warmed, logs / f"nginx-{kind}-{n}"))
         step.client_cpu = time.process_time() - client_cpu
         step.server_cpu = sum(cpu_seconds(p.pid) for p in procs) - cpu[0]
     except Exception as error:  # a refused connection or a timeout is a failed step
@@ -352,6 +358,23 @@ def measure(kind: str, n: int, ctx: Context) -> Step:
     step.errors = sum(r.errors for r in results)
     step.held = sum(r.held for r in results)
     return step
+
+
+async def clients_of(
+    bases: list[str], ctx: Context, n: int, warmed: Callable[[], None], logs: Path
+) -> list[ClientResult]:
+    """The clients against the processes, or through the proxy in front of two of them (its
+    `web` is the first process: any of them serves the API that creates the sessions)."""
+    if not ctx.proxy:
+        return await run_clients(bases, ctx.world, n, ctx.rec, ctx.fps, warmed=warmed)
+    hosts = [base.removeprefix("http://") for base in bases]
+    proxy = start_proxy(logs, hosts[0], (hosts[0], hosts[1]))
+    try:
+        return await run_clients(
+            [proxy.url], ctx.world, n, ctx.rec, ctx.fps, warmed=warmed, processes=bases
+        )
+    finally:
+        proxy.stop()
 
 
 # --- report -----------------------------------------------------------------------------------
@@ -378,7 +401,7 @@ def report(steps: list[Step], args: argparse.Namespace, load: str) -> str:
         "the message period, as independent capture systems would.",
         f"Command: `.venv/bin/python -m bench.bench_live --servers {args.servers} --counts "
         f"{args.counts} --seconds {args.seconds:g} --batch {args.batch} --processes "
-        f"{args.processes}`.",
+        f"{args.processes}{' --proxy' if args.proxy else ''}`.",
         "",
         f"Each client streams {args.seconds:g} s of a 120 Hz recording (UI-PRMD "
         f"`{SESSION}` resampled) at 120 frames/s to its own live session, one frame or a batch "
@@ -432,6 +455,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--processes", default="1,2", help="server processes (redis, uvicorn)")
     parser.add_argument("--markdown", type=Path)
     parser.add_argument("--aligner", action="store_true")
+    parser.add_argument(
+        "--proxy", action="store_true",
+        help="also through docker-compose's nginx proxy in front of 2 processes (redis, uvicorn)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     if args.aligner:
         aligner_times()
@@ -443,9 +470,9 @@ def main(argv: list[str] | None = None) -> None:
             folder = Path(tmp)
             env = server_env(folder, redis_url)
             world = setup_world(env)
-            for batch, processes in configurations(kind, args):
+            for batch, processes, proxy in configurations(kind, args):
                 rec = recording_120(args.seconds, args.fps, batch)
-                ctx = Context(env, world, rec, args.fps, folder, processes)
+                ctx = Context(env, world, rec, args.fps, folder, processes, proxy)
                 steps += grow(kind, ctx, [int(v) for v in args.counts.split(",")])
     text = report(steps, args, load)
     print(text)
@@ -453,11 +480,12 @@ def main(argv: list[str] | None = None) -> None:
         args.markdown.write_text(text + "\n", encoding="utf-8")
 
 
-def configurations(kind: str, args: argparse.Namespace) -> list[tuple[int, int]]:
-    """(frames per message, server processes) to measure for the server kind."""
+def configurations(kind: str, args: argparse.Namespace) -> list[tuple[int, int, bool]]:
+    """(frames per message, server processes, through the proxy) to measure for the kind."""
     batches = [int(v) for v in str(args.batch).split(",")]
     processes = [1] if kind == "runserver" else [int(v) for v in str(args.processes).split(",")]
-    return [(b, p) for b in batches for p in processes]
+    plain = [(b, p, False) for b in batches for p in processes]
+    return plain + ([(b, 2, True) for b in batches] if args.proxy and kind != "runserver" else [])
 
 
 def grow(kind: str, ctx: Context, counts: list[int]) -> list[Step]:

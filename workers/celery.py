@@ -14,6 +14,7 @@ import os
 from typing import Any
 
 from celery import Celery
+from celery.signals import worker_ready
 from kombu import Exchange, Queue
 
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "webapp.settings")
@@ -56,3 +57,11 @@ def _declare_queues(sender: Celery, **kwargs: Any) -> None:
     sender.conf.task_queues = [
         Queue(name, Exchange(name, type="direct"), routing_key=name) for name in queue_names()
     ]
+
+
+@worker_ready.connect
+def _resume_interrupted_analyses(**kwargs: Any) -> None:
+    # Under `make run` nothing else would deliver an analysis cut short again (workers/tasks.py).
+    from workers.tasks import resume_interrupted_local_runs
+
+    resume_interrupted_local_runs()

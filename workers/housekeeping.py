@@ -5,10 +5,11 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from datetime import timedelta
+from typing import Any
 
 from django.conf import settings
 from django.db import transaction
-from django.db.models import F
+from django.db.models import F, QuerySet
 from django.utils import timezone
 
 from webapp.patients.models import Patient
@@ -16,6 +17,10 @@ from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 
 log = logging.getLogger(__name__)
 REAPED_USER_MESSAGE = "The analysis did not finish in time. Please start it again."
+INTERRUPTED_TOO_OFTEN_MESSAGE = (
+    "The analysis was interrupted several times (the analysis service stopped while it ran). "
+    "Please start it again; if it keeps happening, tell your administrator."
+)
 NEVER_STARTED_MESSAGE = (
     "The analysis could not be started: the task queue lost it several times. Please start it "
     "again; if it keeps happening, tell your administrator."
@@ -62,6 +67,33 @@ def max_enqueues() -> int:
     return int(getattr(settings, "ANALYSIS_MAX_ENQUEUES", 4))
 
 
+def _fail(runs: QuerySet[AnalysisRun], user_error: str, developer_error: str) -> int:
+    """Fail the runs with a reason for the user and one for the team; returns how many."""
+    return runs.update(
+        status=RunStatus.FAILED,
+        stage="failed",
+        finished_at=timezone.now(),
+        user_error=user_error,
+        developer_error=developer_error,
+    )
+
+
+def _enqueue_again(
+    runs: QuerySet[AnalysisRun], enqueue: Callable[[str], object], **changes: Any
+) -> int:
+    """Enqueue each of the runs (up to 1,000) that a conditional update takes, counting the
+    enqueue: the query is the condition, so two callers never both enqueue one run."""
+    count = 0
+    for run_id in runs.values_list("pk", flat=True)[:1000]:
+        taken = runs.filter(pk=run_id).update(
+            enqueued_at=timezone.now(), enqueue_count=F("enqueue_count") + 1, **changes
+        )
+        if taken:
+            enqueue(str(run_id))
+            count += 1
+    return count
+
+
 def requeue_lost_runs(enqueue: Callable[[str], object]) -> dict[str, int]:
     """Enqueue again QUEUED runs not started within `requeue_after_seconds`; after
     `max_enqueues` attempts fail them with a reason instead. Returns both counts.
@@ -70,23 +102,34 @@ def requeue_lost_runs(enqueue: Callable[[str], object]) -> dict[str, int]:
     """
     cutoff = timezone.now() - timedelta(seconds=requeue_after_seconds())
     stale = AnalysisRun.objects.filter(status=RunStatus.QUEUED, enqueued_at__lt=cutoff)
-    failed = stale.filter(enqueue_count__gte=max_enqueues()).update(
-        status=RunStatus.FAILED,
-        stage="failed",
-        finished_at=timezone.now(),
-        user_error=NEVER_STARTED_MESSAGE,
-        developer_error=f"never claimed after {max_enqueues()} enqueues",
+    failed = _fail(
+        stale.filter(enqueue_count__gte=max_enqueues()),
+        NEVER_STARTED_MESSAGE,
+        f"never claimed after {max_enqueues()} enqueues",
     )
-    requeued = 0
-    for run_id in stale.values_list("pk", flat=True)[:1000]:
-        # Conditional, so two beat processes never both enqueue the same run.
-        taken = AnalysisRun.objects.filter(
-            pk=run_id, status=RunStatus.QUEUED, enqueued_at__lt=cutoff
-        ).update(enqueued_at=timezone.now(), enqueue_count=F("enqueue_count") + 1)
-        if taken:
-            enqueue(str(run_id))
-            requeued += 1
-    return {"requeued": requeued, "failed": failed}
+    return {"requeued": _enqueue_again(stale, enqueue), "failed": failed}
+
+
+def resume_interrupted_runs(enqueue: Callable[[str], object]) -> dict[str, int]:
+    """Put back in the queue the runs a worker left RUNNING when it ended; for `make run`'s one
+    worker only (workers/local.py), called as it starts, when no analysis can be under way.
+
+    Its folder transport removes a message when a worker takes it, so an analysis cut short
+    (`make run` stopped, the worker killed or out of memory) is delivered by nothing else; the
+    reaper would fail it after the time limit. A run already enqueued `max_enqueues` times fails
+    with a reason instead, so an analysis that brings the worker down is not retried for ever.
+    """
+    running = AnalysisRun.objects.filter(status=RunStatus.RUNNING)
+    failed = _fail(
+        running.filter(enqueue_count__gte=max_enqueues()),
+        INTERRUPTED_TOO_OFTEN_MESSAGE,
+        f"interrupted after {max_enqueues()} enqueues",
+    )
+    resumed = _enqueue_again(running, enqueue, status=RunStatus.QUEUED, stage="", progress=0,
+                             lease_token="")  # fmt: skip
+    if resumed or failed:
+        log.info("interrupted analyses: %d queued again, %d failed", resumed, failed)
+    return {"resumed": resumed, "failed": failed}
 
 
 def purge_deleted_patients(now=None) -> int:

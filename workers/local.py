@@ -19,10 +19,11 @@ those restarts, and messages waiting in the folder survive a restart of either p
 analysis (numpy, numba) also never competes with requests for the server's interpreter lock. With
 ``REDIS_URL`` set the settings ignore ``LOCAL_BROKER_DIR`` and both use Redis.
 
-Limits, for a single machine: the filesystem transport removes a message when the worker takes
-it, so an analysis cut short by stopping `make run` is not delivered again; beat's reap task marks
-that run failed after its time limit and "Analyse again" restarts it. SQLite is shared by the two
-processes in WAL mode with a 30 s busy timeout (webapp/settings.py).
+The filesystem transport removes a message when the worker takes it, so an analysis cut short
+(`make run` stopped, the worker killed) would be delivered by nothing else: each worker, as it
+starts, queues again the runs left under way (`workers.tasks.resume_interrupted_local_runs`; one
+interrupted too often fails with a reason). SQLite is shared by the two processes in WAL mode
+with a 30 s busy timeout (webapp/settings.py).
 """
 
 from __future__ import annotations

@@ -60,6 +60,17 @@ def requeue_lost_runs() -> dict[str, int]:
     return housekeeping.requeue_lost_runs(enqueue=enqueue_analysis)
 
 
+def resume_interrupted_local_runs() -> dict[str, int] | None:
+    """At a worker's start under `make run` (the folder broker: one worker, messages removed
+    when taken), queue again the analyses the previous worker left unfinished; elsewhere the
+    broker delivers an unacknowledged message again and nothing is done here."""
+    from django.conf import settings
+
+    if settings.CELERY_BROKER_URL != "filesystem://":
+        return None
+    return housekeeping.resume_interrupted_runs(enqueue=enqueue_analysis)
+
+
 def enqueue_analysis(run_id: str) -> None:
     analyse_recording.delay(run_id)
 

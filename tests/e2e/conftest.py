@@ -1,6 +1,6 @@
 """A real headless Chromium (Debian's package, never a Playwright download) against live_server.
 
-Chromium missing is an error, not a skip: run tests/e2e/ensure_chromium.sh (CI does).
+Chromium missing is an error, not a skip: run tests/e2e/ensure_programs.sh (CI does).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ def browser():
     from playwright.sync_api import sync_playwright
 
     if not CHROMIUM.exists():
-        pytest.fail(f"{CHROMIUM} is missing: run tests/e2e/ensure_chromium.sh", pytrace=False)
+        pytest.fail(f"{CHROMIUM} is missing: run tests/e2e/ensure_programs.sh", pytrace=False)
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(
             executable_path=str(CHROMIUM),

@@ -6,11 +6,15 @@ a real Celery worker on the filesystem broker, `tests/local_server.py`), never e
 - leaving the exercise blank stores the file and suggests the exercise; confirming the suggestion
   starts the analysis, which finishes; uploading the same file again while the first upload still
   waits for its exercise reuses that upload instead of refusing it as a duplicate;
-- a bad answer on the form keeps what was typed.
+- a bad answer on the form keeps what was typed;
+- a worker killed in the middle of an analysis is started again, and the analysis it cut short
+  is queued again and finishes.
 """
 
 from __future__ import annotations
 
+import os
+import signal
 import time
 from pathlib import Path
 
@@ -23,6 +27,7 @@ from tests.personas import PASSWORD
 pytestmark = pytest.mark.e2e
 DATA = Path(__file__).resolve().parents[2] / "data/ui-prmd"
 SQUAT = DATA / "sessions/m01_s02_correct.bvh.gz"
+SQUAT_AGAIN = DATA / "sessions/m01_s03_correct.bvh.gz"
 ABDUCTION = DATA / "reps/m07_s01_e02.bvh.gz"
 SETUP = """
 from tests.personas import make_exercise, make_user
@@ -159,3 +164,38 @@ def test_blank_exercise_is_suggested_confirmed_and_uploading_again_reuses_it(use
     submit_upload(page, site.url, ABDUCTION)
     errors = " ".join(page.locator("p.error").all_inner_texts())
     assert "already uploaded" in errors
+
+
+def celery_worker_pid(site: LocalServer) -> int:
+    """The Celery worker the launcher started (in a process group of its own)."""
+    assert site.process is not None
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+            cmdline = (stat.parent / "cmdline").read_bytes()
+        except OSError:
+            continue
+        if int(fields[1]) == site.process.pid and b"celery" in cmdline:
+            return int(stat.parent.name)
+    raise AssertionError("no worker under the launcher:\n" + site.log_tail())
+
+
+def test_an_analysis_cut_short_by_a_killed_worker_is_finished(user_page, site):
+    page = user_page
+    submit_upload(page, site.url, SQUAT_AGAIN, exercise="Deep squat")
+    page.wait_for_url("**/recordings/*/")
+    status_url = site.url + page.get_attribute("#run-status", "data-status-url")
+    deadline = time.monotonic() + 120
+    while True:  # until the worker is in the middle of it
+        run = page.request.get(status_url).json()
+        if run["status"] == "running" and run["progress"] > 0:
+            break
+        assert run["status"] in ("queued", "running") and time.monotonic() < deadline, run
+        page.wait_for_timeout(50)
+
+    worker = celery_worker_pid(site)
+    os.killpg(worker, signal.SIGKILL)  # the worker and its pool, as the out-of-memory killer might
+    watch_until_succeeded(page, site)
+    assert celery_worker_pid(site) != worker
+    assert "starting it again" in site.log_tail(400)
+    assert "interrupted analyses: 1 queued again" in site.log_tail(400)

@@ -6,6 +6,7 @@ from django.utils import timezone
 from tests.personas import make_world
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 from workers.housekeeping import (
+    INTERRUPTED_TOO_OFTEN_MESSAGE,
     NEVER_STARTED_MESSAGE,
     REAPED_USER_MESSAGE,
     reap_stuck_runs,
@@ -80,3 +81,42 @@ def test_lost_queued_runs_are_enqueued_again_then_failed(recording, settings, mo
     assert hopeless.status == RunStatus.FAILED and hopeless.user_error == NEVER_STARTED_MESSAGE
     assert waiting.status == RunStatus.QUEUED and waiting.enqueue_count == 1
     assert requeue_lost_runs() == {"requeued": 0, "failed": 0}
+
+
+def test_make_runs_worker_queues_again_what_the_last_one_left_unfinished(
+    recording, settings, monkeypatch
+):
+    """Under `make run` (the folder broker) a starting worker puts RUNNING runs back in the queue
+    and enqueues them; one interrupted `ANALYSIS_MAX_ENQUEUES` times fails with a reason; finished
+    and waiting runs are left alone. With any other broker it does nothing."""
+    from workers import tasks
+
+    sent: list[str] = []
+    monkeypatch.setattr(tasks.analyse_recording, "delay", sent.append)
+    settings.ANALYSIS_MAX_ENQUEUES = 3
+    cut_short = AnalysisRun.objects.create(
+        recording=recording, status=RunStatus.RUNNING, started_at=timezone.now(),
+        stage="aligning", progress=60, lease_token="old-worker",
+    )  # fmt: skip
+    too_often = AnalysisRun.objects.create(
+        recording=recording, status=RunStatus.RUNNING, enqueue_count=3
+    )
+    done = AnalysisRun.objects.create(recording=recording, status=RunStatus.SUCCEEDED)
+    waiting = AnalysisRun.objects.create(recording=recording)
+
+    settings.CELERY_BROKER_URL = "redis://127.0.0.1:6379/0"
+    assert tasks.resume_interrupted_local_runs() is None  # a broker that redelivers by itself
+    assert sent == []
+
+    settings.CELERY_BROKER_URL = "filesystem://"
+    assert tasks.resume_interrupted_local_runs() == {"resumed": 1, "failed": 1}
+    assert sent == [str(cut_short.pk)]
+    for run in (cut_short, too_often, done, waiting):
+        run.refresh_from_db()
+    assert cut_short.status == RunStatus.QUEUED and cut_short.enqueue_count == 2
+    assert (cut_short.progress, cut_short.lease_token) == (0, "")
+    assert too_often.status == RunStatus.FAILED
+    assert too_often.user_error == INTERRUPTED_TOO_OFTEN_MESSAGE
+    assert done.status == RunStatus.SUCCEEDED
+    assert waiting.status == RunStatus.QUEUED and waiting.enqueue_count == 1
+    assert tasks.resume_interrupted_local_runs() == {"resumed": 0, "failed": 0}
