@@ -19,7 +19,13 @@ from webapp.api.numbers import rounded, utc_iso
 from webapp.dashboard.models import ProgressPoint
 from webapp.demo import large_clinic
 from webapp.patients.progress import clinical_progress, patient_progress
-from webapp.patients.progress_store import POINT_VALUES, angle_ranges_of, store_missing
+from webapp.patients.progress_store import (
+    POINT_VALUES,
+    angle_ranges_of,
+    store_missing,
+    summary_values,
+    typed_field,
+)
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 from webapp.recordings.words import body_part
 from workers import runs
@@ -218,3 +224,25 @@ def test_store_missing_stores_every_succeeded_run_once_and_reports(world, histor
     assert done == 6 and reports == [4, 6]
     assert store_missing(AnalysisRun.objects.all()) == 0
     assert ProgressPoint.objects.count() == 6
+
+
+def test_the_database_and_python_read_the_same_values_from_a_summary(world, history):
+    """`summary_values` (a bulk load's summaries, in Python) and `POINT_VALUES` (the database)
+    take the same figures from every stored summary, missing keys included."""
+    runs_ = AnalysisRun.objects.filter(recording__patient=world.patient).order_by()
+    rows = {row["pk"]: row for row in runs_.values("pk", **POINT_VALUES)}
+    checked = 0
+    for run in runs_:
+        expected = {name: rows[run.pk][name] for name in POINT_VALUES}
+        assert summary_values(run.summary or {}) == expected
+        checked += 1
+    assert checked >= 5
+    assert summary_values({}) == dict.fromkeys(POINT_VALUES)
+
+
+def test_a_point_path_must_name_a_field_of_the_typed_summary():
+    from analysis.pipeline.results import AnalysisSummary
+
+    assert typed_field(AnalysisSummary, "range_of_motion") == "range_of_motion"
+    with pytest.raises(LookupError, match="no field 'range_of_movement'"):
+        typed_field(AnalysisSummary, "range_of_movement")

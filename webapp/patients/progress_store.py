@@ -3,7 +3,8 @@
 A point holds what the progress charts and the API take from a run's summary (score, number of
 repetitions, range of motion, γ, clinical angle ranges, each hand's reachable area), rendered once
 as JSON text, plain and rounded. The database extracts those keys from the summary, so the rest
-of it (assessment, feedback, workspace hulls: most of its 10–20 kB) never reaches Python.
+of it (assessment, feedback, workspace hulls: most of its 10–20 kB) never reaches Python; the
+keys are the typed summary's field names (`POINT_PATHS`), checked when the module loads.
 
 Written when a run succeeds (`store_after_run`), in bulk after a bulk load (`store_missing`), and
 by a read that meets a succeeded run without one (`store_points`): a summary is written once, when
@@ -15,12 +16,13 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable, Iterable, Iterator
+from dataclasses import fields
 from typing import Any
 
 from django.db.models import Func, IntegerField, QuerySet
 from django.db.models.fields.json import KeyTransform
 
-from analysis.pipeline.results import AngleRange
+from analysis.pipeline.results import AnalysisSummary, AngleRange, WorkspaceSummary
 from webapp.api.numbers import rounded
 from webapp.dashboard.models import ProgressPoint
 from webapp.recordings.models import AnalysisRun, RunStatus
@@ -36,37 +38,56 @@ class JsonArrayLength(Func):
         return self.as_sql(compiler, connection, function="JSONB_ARRAY_LENGTH", **extra_context)
 
 
-def workspace_area(side: str) -> KeyTransform:
-    """summary.workspace.<side>.relative_area, without reading the hull."""
-    return KeyTransform("relative_area", KeyTransform(side, KeyTransform("workspace", "summary")))
+def typed_field(cls: type, name: str) -> str:
+    """A field name of a typed result, checked when this module loads: a renamed field stops the
+    start instead of leaving the charts empty."""
+    if name not in {f.name for f in fields(cls)}:
+        raise LookupError(f"{cls.__name__} has no field {name!r}")
+    return name
 
 
-POINT_VALUES = {
-    "repetition_count": JsonArrayLength(KeyTransform("repetitions", "summary")),
-    "range_of_motion": KeyTransform("range_of_motion", "summary"),
-    "gamma": KeyTransform("gamma", "summary"),
-    "clinical_angles": KeyTransform("clinical_angles", "summary"),
-    "workspace_left": workspace_area("left"),
-    "workspace_right": workspace_area("right"),
+SIDES = ("left", "right")
+# Point value -> its path in the stored summary (`AnalysisSummary.to_json`).
+POINT_PATHS: dict[str, tuple[str, ...]] = {
+    "repetition_count": (typed_field(AnalysisSummary, "repetitions"),),  # the list's length
+    "range_of_motion": (typed_field(AnalysisSummary, "range_of_motion"),),
+    "gamma": (typed_field(AnalysisSummary, "gamma"),),
+    "clinical_angles": (typed_field(AnalysisSummary, "clinical_angles"),),
+    **{
+        f"workspace_{side}": (
+            typed_field(AnalysisSummary, "workspace"),
+            side,
+            typed_field(WorkspaceSummary, "relative_area"),
+        )
+        for side in SIDES
+    },
 }
+COUNTED = {"repetition_count"}
+
+
+def _in_database(name: str, path: tuple[str, ...]) -> Func | KeyTransform:
+    expression = KeyTransform(path[0], "summary")
+    for key in path[1:]:
+        expression = KeyTransform(key, expression)
+    return JsonArrayLength(expression) if name in COUNTED else expression
+
+
+def _in_python(name: str, path: tuple[str, ...], summary: dict[str, Any]) -> Any:
+    value: Any = summary
+    for key in path:
+        value = value.get(key) if isinstance(value, dict) else None
+    if name in COUNTED:
+        return len(value) if isinstance(value, list) else None
+    return value
+
+
+POINT_VALUES = {name: _in_database(name, path) for name, path in POINT_PATHS.items()}
 
 
 def summary_values(summary: dict[str, Any]) -> dict[str, Any]:
     """What `POINT_VALUES` extracts, read from a summary already in Python (a bulk load that
     generates its summaries renders their points without reading them back)."""
-    repetitions = summary.get("repetitions")
-    stored_workspace = summary.get("workspace")
-    workspace: dict = stored_workspace if isinstance(stored_workspace, dict) else {}
-    return {
-        "repetition_count": len(repetitions) if isinstance(repetitions, list) else None,
-        "range_of_motion": summary.get("range_of_motion"),
-        "gamma": summary.get("gamma"),
-        "clinical_angles": summary.get("clinical_angles"),
-        **{
-            f"workspace_{side}": (workspace.get(side) or {}).get("relative_area")
-            for side in ("left", "right")
-        },
-    }
+    return {name: _in_python(name, path, summary) for name, path in POINT_PATHS.items()}
 
 
 def angle_ranges_of(stored: Any) -> dict[str, dict[str, float]]:
@@ -87,7 +108,7 @@ def run_figures(row: dict[str, Any]) -> dict[str, Any]:
         "clinical_angles": angle_ranges_of(row["clinical_angles"]),
         "workspace": {
             side: float(row[f"workspace_{side}"])
-            for side in ("left", "right")
+            for side in SIDES
             if row[f"workspace_{side}"] is not None
         },
     }
