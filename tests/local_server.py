@@ -88,6 +88,19 @@ class LocalServer:
     def worker_ready(self) -> bool:
         return b"ready." in self.log_path.read_bytes()
 
+    def worker_pid(self) -> int:
+        """The Celery worker the launcher started (in a process group of its own)."""
+        assert self.process is not None
+        for stat in Path("/proc").glob("[0-9]*/stat"):
+            try:
+                parent = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+                command = (stat.parent / "cmdline").read_bytes()
+            except OSError:
+                continue
+            if parent == self.process.pid and b"celery" in command:
+                return int(stat.parent.name)
+        raise AssertionError("no worker under the launcher:\n" + self.log_tail())
+
     def running(self) -> bool:
         return self.process is not None and self.process.poll() is None
 

@@ -166,20 +166,6 @@ def test_blank_exercise_is_suggested_confirmed_and_uploading_again_reuses_it(use
     assert "already uploaded" in errors
 
 
-def celery_worker_pid(site: LocalServer) -> int:
-    """The Celery worker the launcher started (in a process group of its own)."""
-    assert site.process is not None
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-            cmdline = (stat.parent / "cmdline").read_bytes()
-        except OSError:
-            continue
-        if int(fields[1]) == site.process.pid and b"celery" in cmdline:
-            return int(stat.parent.name)
-    raise AssertionError("no worker under the launcher:\n" + site.log_tail())
-
-
 def test_an_analysis_cut_short_by_a_killed_worker_is_finished(user_page, site):
     page = user_page
     submit_upload(page, site.url, SQUAT_AGAIN, exercise="Deep squat")
@@ -193,9 +179,9 @@ def test_an_analysis_cut_short_by_a_killed_worker_is_finished(user_page, site):
         assert run["status"] in ("queued", "running") and time.monotonic() < deadline, run
         page.wait_for_timeout(50)
 
-    worker = celery_worker_pid(site)
+    worker = site.worker_pid()
     os.killpg(worker, signal.SIGKILL)  # the worker and its pool, as the out-of-memory killer might
     watch_until_succeeded(page, site)
-    assert celery_worker_pid(site) != worker
+    assert site.worker_pid() != worker
     assert "starting it again" in site.log_tail(400)
     assert "interrupted analyses: 1 queued again" in site.log_tail(400)
