@@ -8,6 +8,7 @@ COPY package.json package-lock.json ./
 RUN npm ci --no-audit --no-fund --loglevel=error
 COPY pyproject.toml README.md ./
 COPY analysis analysis
+COPY capture capture
 COPY workers workers
 COPY webapp webapp
 RUN pip install --no-cache-dir -e .

@@ -9,7 +9,7 @@ PYTEST_ARGS ?=
 # one). Each file stays in one process: its module fixtures (servers, browsers) are made once.
 TEST_WORKERS ?= 2
 
-.PHONY: run worker beat test test-analysis lint format bench bench-browser bench-live fuzz migrate demo clean
+.PHONY: run worker beat test test-analysis lint format bench bench-browser bench-live fuzz hostile migrate demo clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -33,11 +33,15 @@ deps: $(VENV)/.stamp-python node_modules/.stamp
 migrate: deps
 	$(BIN)/python manage.py migrate --noinput
 
+# The demo clinic's accounts have published passwords: the loader runs only when DEMO_ALLOWED
+# says so, as here.
 demo: migrate
-	$(BIN)/python manage.py load_demo
+	DEMO_ALLOWED=1 $(BIN)/python manage.py load_demo
 
 # The server and a real Celery worker beside it, on a broker folder in var/ (workers/local.py);
-# WORKER_CONCURRENCY analyses at a time (2). With REDIS_URL set, both use Redis instead.
+# WORKER_CONCURRENCY analyses at a time (2). With REDIS_URL set, both use Redis instead. Serves
+# with DEBUG off (DEBUG=1 make run for the technical error pages and code reloading); SIGTERM or
+# Ctrl-C stops everything it started. ANALYSIS_MEMORY_LIMIT_MB caps each analysis (3072).
 run: demo
 	$(BIN)/python -m workers.local 127.0.0.1:$(PORT)
 
@@ -83,11 +87,18 @@ bench-browser: deps
 	bash tests/e2e/ensure_programs.sh
 	E2E_DOCS=1 $(BIN)/python -m pytest tests/e2e -q
 
-# Long fuzzing run of the BVH parser and the upload endpoints (the suite runs a fixed-seed
-# 8,400 + 1,600 cases); FUZZ_EXAMPLES and FUZZ_UPLOAD_EXAMPLES set the counts.
+# Long fuzzing run of the BVH parser, the upload endpoints and `analyse` on hostile files (the
+# suite runs a fixed-seed 8,400 + 1,600 cases and 2,000 hostile files); FUZZ_EXAMPLES,
+# FUZZ_UPLOAD_EXAMPLES, HOSTILE_COUNT and HOSTILE_SEED set the counts and the seed.
 fuzz: $(VENV)/.stamp-python
 	FUZZ_EXAMPLES=$${FUZZ_EXAMPLES:-50000} $(BIN)/python -m pytest tests/analysis/test_bvh_fuzz.py -p no:django -q
 	FUZZ_UPLOAD_EXAMPLES=$${FUZZ_UPLOAD_EXAMPLES:-10000} $(BIN)/python -m pytest tests/webapp/test_upload_fuzz.py -q -s
+	$(BIN)/python -m tests.hostile_run --count $${HOSTILE_COUNT:-100000} --seed $${HOSTILE_SEED:-$$(date +%s)}
+
+# `analyse` on 10,000 fixed-seed hostile files, each in its own process (about 5 minutes on two
+# cores); prints the summary line the suite's 2,000-file test checks.
+hostile: $(VENV)/.stamp-python
+	$(BIN)/python -m tests.hostile_run --count $${HOSTILE_COUNT:-10000} --seed $${HOSTILE_SEED:-25}
 
 # Scale: a throw-away PostgreSQL database with a large clinic (10,000 patients, 1,000,000 runs),
 # page latency and query counts on it, then the database is dropped.

@@ -209,7 +209,7 @@ class Recording120:
 def recording_120(seconds: float, fps: float, batch: int) -> Recording120:
     from analysis.bvh import read
     from analysis.kinematics import resample
-    from analysis.online.stream import header_text
+    from analysis.live import header_text
 
     motion = resample(read(DATA / SESSION), fps)
     n = min(motion.n_frames, int(seconds * fps))
@@ -431,7 +431,7 @@ def report(steps: list[Step], args: argparse.Namespace, load: str) -> str:
 
 def aligner_times() -> None:
     from analysis.bvh import read
-    from analysis.online.live import LiveAligner
+    from analysis.live import LiveAligner
     from bench.eval_live import tutor_model
 
     model = tutor_model(DATA, "m07")

@@ -65,6 +65,7 @@ class ExerciseResult:
     starts_total: int = 0
     seconds: float = 0.0
     fallbacks: int = 0
+    unfit: int = 0  # sessions called "does not look like" the exercise (all are of it)
     agree: int = 0  # sessions whose pass/fail (score >= pass_threshold) matches the label
     thresholds: set[float] = field(default_factory=set)
     corrections: list[tuple[int, bool]] = field(default_factory=list)  # (count, is correct)
@@ -122,8 +123,10 @@ def evaluate_session(result: ExerciseResult, session: Session, model, tutor: Ses
     for truth in session.rep_starts:
         result.starts_total += 1
         result.starts_found += bool(found) and min(abs(f - truth) for f in found) <= 5
-    result.recording_scores.append((summary["score"], session.correct))
-    result.agree += (summary["score"] >= summary["pass_threshold"]) == session.correct
+    score = 0.0 if summary["score"] is None else summary["score"]  # None: does not fit
+    result.unfit += not summary.get("match", {"fits": True})["fits"]
+    result.recording_scores.append((score, session.correct))
+    result.agree += (score >= summary["pass_threshold"]) == session.correct
     result.thresholds.add(summary["pass_threshold"])
     advice = summary.get("advice") or {}
     result.corrections.append((len(advice.get("corrections", ())), session.correct))
@@ -179,7 +182,8 @@ def table(data: Path, exercises: list[str], trained: bool) -> list[ExerciseResul
     print(f"| **mean** | {rec:.3f} | {rep:.3f} | {base:.3f} | {exact:.3f} | {starts:.3f} | |")
     fallbacks = sum(r.fallbacks for r in results)
     print(f"\nFallback segmentation (no key-pose cycle): {fallbacks} of "
-          f"{sum(r.sessions for r in results)} sessions.")  # fmt: skip
+          f"{sum(r.sessions for r in results)} sessions; called \"does not look like\" the "
+          f"exercise: {sum(r.unfit for r in results)}.")  # fmt: skip
     calibration_figures(results)
     now = {"AUC recording": rec, "AUC repetition": rep, "exact count": exact, "starts ±5": starts}
     before = BEFORE[title]

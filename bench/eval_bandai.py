@@ -47,16 +47,13 @@ def evaluate(path: Path, model: FittedModel) -> tuple[str, float, bool, str, boo
     """(take, score, as expected, first correction, names the arm that stayed down)."""
     summary = analyse(read(path), model).summary
     side = down_side(path.name)
-    expected = (
-        summary.score < summary.pass_threshold
-        if side
-        else (summary.score >= summary.pass_threshold)
-    )
+    score = 0.0 if summary.score is None else summary.score  # None: does not fit the exercise
+    expected = score < summary.pass_threshold if side else score >= summary.pass_threshold
     first = summary.advice.corrections[0] if summary.advice.corrections else None
     text = first.text if first else ""
     arm = ("arm", "elbow", "hand", "shoulder")
     named = bool(first) and first.part.startswith(side) and any(w in first.part for w in arm)
-    return path.stem.removeprefix("dataset-2_"), summary.score, expected, text, named or not side
+    return path.stem.removeprefix("dataset-2_"), score, expected, text, named or not side
 
 
 def main() -> None:

@@ -42,6 +42,7 @@ class LocalServer:
     def env(self) -> dict[str, str]:
         env = {k: v for k, v in os.environ.items() if k not in ("REDIS_URL", "DATABASE_URL")}
         env.update(DATA_DIR=str(self.data_dir), DJANGO_SETTINGS_MODULE="webapp.settings")
+        env.update(DEMO_ALLOWED="1")
         env.pop("LOCAL_BROKER_DIR", None)
         env.update(self.extra_env)
         return env
@@ -58,7 +59,7 @@ class LocalServer:
         self.data_dir.mkdir(parents=True, exist_ok=True)
         self.manage("migrate", "--noinput", "-v0")
         if self.demo:
-            self.manage("load_demo")
+            self.manage("load_demo")  # the environment allows it, as `make demo` does
         if self.setup:
             self.manage("shell", "-c", self.setup)
 

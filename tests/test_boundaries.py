@@ -34,7 +34,7 @@ def test_nothing_reads_the_shared_folder():
     pattern = "../" + "shared"
     hits = [
         str(p.relative_to(ROOT))
-        for folder in ("analysis", "workers", "webapp", "tests", "bench", "templates")
+        for folder in ("analysis", "capture", "workers", "webapp", "tests", "bench", "templates")
         for p in (ROOT / folder).rglob("*")
         if p.is_file() and p.suffix in {".py", ".html", ".js", ".toml"} and pattern in p.read_text()
     ]

@@ -10,6 +10,7 @@ import os
 from pathlib import Path
 
 import dj_database_url
+from celery.schedules import crontab
 from django.core.exceptions import ImproperlyConfigured
 
 BASE_DIR = Path(__file__).resolve().parent.parent
@@ -34,8 +35,9 @@ if not DEBUG and SECRET_KEY == DEV_SECRET_KEY:
         "Set SECRET_KEY: DEBUG is off and the development secret key is in use."
     )
 
-# The demo clinic has published passwords: it may be loaded only on development set-ups.
-DEMO_ALLOWED = env_bool("DEMO_ALLOWED", DEBUG)
+# The demo clinic has published passwords: the loader runs only where this is switched on
+# explicitly (`make demo` and `make run` do), whatever DEBUG says.
+DEMO_ALLOWED = env_bool("DEMO_ALLOWED", False)
 
 ALLOWED_HOSTS = env_list("ALLOWED_HOSTS", "localhost,127.0.0.1,[::1],testserver")
 CSRF_TRUSTED_ORIGINS = env_list("CSRF_TRUSTED_ORIGINS", "")
@@ -70,6 +72,11 @@ INSTALLED_APPS = [
 # Uploads: the largest recording accepted, in bytes (a 10-minute 120 fps take is about 40 MB).
 MAX_UPLOAD_BYTES = int(os.environ.get("MAX_UPLOAD_BYTES", str(64 * 1024 * 1024)))
 DATA_UPLOAD_MAX_MEMORY_SIZE = 2 * 1024 * 1024
+# What a recording may be before it is analysed (analysis.bvh.plausibility; checked on upload, by
+# the worker and by the pipeline): its length, its frames, and the memory its analysis may need.
+RECORDING_MAX_SECONDS = float(os.environ.get("RECORDING_MAX_SECONDS", "1800"))
+RECORDING_MAX_FRAMES = int(os.environ.get("RECORDING_MAX_FRAMES", "500000"))
+RECORDING_MAX_ANALYSIS_BYTES = int(os.environ.get("RECORDING_MAX_ANALYSIS_BYTES", str(2 << 30)))
 
 MIDDLEWARE = [
     "django.middleware.security.SecurityMiddleware",
@@ -142,7 +149,9 @@ STATICFILES_DIRS = [
     ("vendor/three/examples/jsm/controls", _THREE / "examples" / "jsm" / "controls"),
     ("vendor/plotly", Path(__import__("plotly").__file__).parent / "package_data"),
 ]
-WHITENOISE_USE_FINDERS = DEBUG
+# Static files straight from their folders (no collectstatic): with DEBUG on, and under `make
+# run`'s launcher, which serves with DEBUG off (workers/local.py sets it).
+WHITENOISE_USE_FINDERS = env_bool("WHITENOISE_USE_FINDERS", DEBUG)
 MEDIA_URL = "/media/"
 MEDIA_ROOT = Path(os.environ.get("MEDIA_ROOT", DATA_DIR / "media"))
 
@@ -177,6 +186,15 @@ LOGIN_URL = "accounts:login"
 LOGIN_REDIRECT_URL = "dashboard:home"
 LOGOUT_REDIRECT_URL = "accounts:login"
 EMAIL_BACKEND = os.environ.get("EMAIL_BACKEND", "django.core.mail.backends.console.EmailBackend")
+# Outgoing mail (password resets, reminders of missed sessions): SMTP when EMAIL_BACKEND says so.
+EMAIL_HOST = os.environ.get("EMAIL_HOST", "localhost")
+EMAIL_PORT = int(os.environ.get("EMAIL_PORT", "25"))
+EMAIL_HOST_USER = os.environ.get("EMAIL_HOST_USER", "")
+EMAIL_HOST_PASSWORD = os.environ.get("EMAIL_HOST_PASSWORD", "")
+EMAIL_USE_TLS = env_bool("EMAIL_USE_TLS", False)
+DEFAULT_FROM_EMAIL = os.environ.get("DEFAULT_FROM_EMAIL", "physio-dashboard@localhost")
+# The site's address as patients reach it ("https://physio.example.org"), for links in e-mails.
+SITE_URL = os.environ.get("SITE_URL", "")
 
 # Security (issue 8). Production (DEBUG off) is HTTPS-only unless the environment says otherwise;
 # `manage.py check --deploy` is clean with these defaults (tests/webapp/test_deploy_check.py).
@@ -254,6 +272,11 @@ CELERY_WORKER_PREFETCH_MULTIPLIER = 1
 CELERY_RESULT_EXPIRES = 3600
 ANALYSIS_SOFT_TIME_LIMIT = int(os.environ.get("ANALYSIS_SOFT_TIME_LIMIT", "300"))
 ANALYSIS_TIME_LIMIT = int(os.environ.get("ANALYSIS_TIME_LIMIT", "360"))
+# Each worker pool process may hold this much memory (MB; 0: no ceiling); an analysis needing
+# more fails with a plain reason instead of bringing the machine down (workers/limits.py).
+ANALYSIS_MEMORY_LIMIT_MB = int(os.environ.get("ANALYSIS_MEMORY_LIMIT_MB", "3072"))
+# A run whose worker died under it this many times fails with a reason; never claimed again.
+ANALYSIS_MAX_ATTEMPTS = int(os.environ.get("ANALYSIS_MAX_ATTEMPTS", "2"))
 # A RUNNING run whose worker has not reported for this long may be claimed again (worker died).
 ANALYSIS_LEASE_SECONDS = int(os.environ.get("ANALYSIS_LEASE_SECONDS", "60"))
 # Paper 002 retrieval: principal components of the 2-bit codes, and how many recordings to compare.
@@ -293,6 +316,8 @@ if LOCAL_BROKER_DIR and not REDIS_URL:
         DATABASES["default"].setdefault("OPTIONS", {}).update(
             timeout=30, init_command="PRAGMA journal_mode=WAL;", transaction_mode="IMMEDIATE"
         )
+REMINDER_HOUR = int(os.environ.get("REMINDER_HOUR", "17"))
+CELERY_TIMEZONE = TIME_ZONE  # crontab entries below read the clinic's hours
 CELERY_BEAT_SCHEDULE = {
     "reap-stuck-runs": {"task": "workers.tasks.reap_stuck_runs", "schedule": 60.0},
     "requeue-lost-runs": {"task": "workers.tasks.requeue_lost_runs", "schedule": 60.0},
@@ -305,6 +330,12 @@ CELERY_BEAT_SCHEDULE = {
     # The home page's stored attention list: runs refresh their patient on write; this catches
     # what changes with time alone (failures ageing out, sessions missed).
     "refresh-attention": {"task": "workers.tasks.refresh_attention", "schedule": 600.0},
+    # E-mail reminders of missed sessions (webapp.patients.reminders), daily at REMINDER_HOUR
+    # in TIME_ZONE, leaving the evening to exercise; at most one per patient a day whatever runs.
+    "send-reminders": {
+        "task": "workers.tasks.send_reminders",
+        "schedule": crontab(hour=REMINDER_HOUR, minute=0),
+    },
 }
 
 REST_FRAMEWORK = {
@@ -328,6 +359,8 @@ SPECTACULAR_SETTINGS = {
     "SERVE_INCLUDE_SCHEMA": False,
     # Swagger UI from the sidecar package: the docs page works offline.
     "SWAGGER_UI_DIST": "SIDECAR",
+    # No badge that sends the schema's address to Swagger's online validator (a third party).
+    "SWAGGER_UI_SETTINGS": {"deepLinking": True, "validatorUrl": None},
     "SWAGGER_UI_FAVICON_HREF": "SIDECAR",
     "REDOC_DIST": "SIDECAR",
     # Several "status" fields: each set of states gets its own schema name.

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import logging
+import os
 import socket
 import time
 import traceback
@@ -16,12 +17,14 @@ from django.core.files.base import ContentFile
 from django.db import InterfaceError, OperationalError, transaction
 
 from analysis import __version__ as code_version
-from analysis.bvh import AnalysisInputError, read
+from analysis.bvh import AnalysisInputError, Limits, check_recording, read
 from analysis.pipeline import AnalysisResult, analyse
 from webapp.patients.models import PerformanceLevel
 from webapp.recordings.models import AnalysisRun
 from webapp.recordings.storage import read_verified
 from workers import exercise_models, runs
+from workers.exercise_match import match_context
+from workers.limits import LIMIT_ERRORS, limit_reason
 
 log = logging.getLogger(__name__)
 GENERIC_FAILURE = (
@@ -40,7 +43,8 @@ class TransientAnalysisError(Exception):
 
 
 def worker_name() -> str:
-    return socket.gethostname()
+    """The machine and process analysing the run (which process to look at, or stop)."""
+    return f"{socket.gethostname()} pid {os.getpid()}"
 
 
 def analyse_run(run_id: str, resume_token: str | None = None) -> str:
@@ -69,6 +73,9 @@ def analyse_claimed(run_id: str, token: str) -> str:
         result, model_row = compute(run, token)
     except TRANSIENT_ERRORS:
         raise
+    except LIMIT_ERRORS as error:  # past this server's memory or time for one analysis
+        runs.fail(run_id, token, limit_reason(error), f"{error!r}\n{traceback.format_exc()}")
+        return "failed"
     except AnalysisInputError as error:
         runs.fail(run_id, token, str(error), traceback.format_exc())
         return "failed"
@@ -86,6 +93,11 @@ def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
         raise AnalysisInputError("Choose the exercise of this recording before analysing it.")
     runs.report(str(run.pk), token, "loading", 2)
     motion = read(read_verified(recording))
+    # Refused here, with its plain reason, before a model is built or anything allocated for it
+    # (the model's frame rate and joints are its tutor's).
+    limits = Limits.from_settings(settings)
+    tutor = recording.exercise.tutor_motion()
+    check_recording(motion, tutor.fps, len(tutor.skeleton.names), limits)
     model_row, model = exercise_models.active_model(recording.exercise)
     history = previous_levels(recording)
 
@@ -93,7 +105,11 @@ def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
         runs.report(str(run.pk), token, stage, 5 + int(90 * fraction))
         stage_delay()
 
-    return analyse(motion, model, history=history, on_progress=on_progress), model_row
+    result = analyse(
+        motion, model, history=history, on_progress=on_progress, limits=limits,
+        match=match_context(recording.exercise),
+    )  # fmt: skip
+    return result, model_row
 
 
 def stage_delay() -> None:

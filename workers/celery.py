@@ -6,6 +6,11 @@ Queues: analyses (and the short housekeeping tasks) go to the default queue (``C
 message at a time, so a model build or a report never sits in front of an analysis, and dedicated
 workers (``-Q analyses``) keep analysing while builds run elsewhere. A worker started without
 ``-Q`` (``make worker``) consumes every queue.
+
+Every worker, wherever it runs, sets its own limits (workers/limits.py): a memory ceiling on each
+pool process (``ANALYSIS_MEMORY_LIMIT_MB``) and Celery's soft and hard time limits; its pool and
+beat processes die with it. What happens to a run whose pool process did not come back is
+workers/task_guard.py's.
 """
 
 from __future__ import annotations
@@ -14,7 +19,7 @@ import os
 from typing import Any
 
 from celery import Celery
-from celery.signals import worker_ready
+from celery.signals import beat_embedded_init, task_prerun, worker_process_init, worker_ready
 from kombu import Exchange, Queue
 
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "webapp.settings")
@@ -65,3 +70,37 @@ def _resume_interrupted_analyses(**kwargs: Any) -> None:
     from workers.tasks import resume_interrupted_local_runs
 
     resume_interrupted_local_runs()
+
+
+@worker_process_init.connect
+def _limit_pool_process(**kwargs: Any) -> None:
+    # Each prefork pool process: the memory ceiling for the analyses it runs, and it dies with
+    # the worker's main process (workers/limits.py).
+    from workers.limits import die_with_parent
+
+    die_with_parent()
+    _limit_memory()
+
+
+@beat_embedded_init.connect
+def _beat_dies_with_the_worker(**kwargs: Any) -> None:
+    # `celery worker -B` (make run): the beat process ends with the worker that started it.
+    from workers.limits import die_with_parent
+
+    die_with_parent()
+
+
+@task_prerun.connect
+def _limit_solo_worker(task: Any = None, **kwargs: Any) -> None:
+    # Pools without pool processes (solo, threads) run tasks in the worker itself: the ceiling
+    # goes on it before its first task. Eager tasks (tests, manage.py) run unlimited.
+    if task is not None and not task.request.is_eager:
+        _limit_memory()
+
+
+def _limit_memory() -> None:
+    from django.conf import settings
+
+    from workers.limits import apply_memory_limit
+
+    apply_memory_limit(int(settings.ANALYSIS_MEMORY_LIMIT_MB))  # the same again: no change

@@ -12,8 +12,11 @@ from django.db import transaction
 from django.db.models import F, QuerySet
 from django.utils import timezone
 
+from webapp.dashboard.precompute import refresh_after_run
 from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
+from workers.limits import time_limit_message
+from workers.runs import give_up
 
 log = logging.getLogger(__name__)
 REAPED_USER_MESSAGE = "The analysis did not finish in time. Please start it again."
@@ -116,11 +119,13 @@ def resume_interrupted_runs(enqueue: Callable[[str], object]) -> dict[str, int]:
 
     Its folder transport removes a message when a worker takes it, so an analysis cut short
     (`make run` stopped, the worker killed or out of memory) is delivered by nothing else; the
-    reaper would fail it after the time limit. A run already enqueued `max_enqueues` times fails
-    with a reason instead, so an analysis that brings the worker down is not retried for ever.
+    reaper would fail it after the time limit. A run already tried ``ANALYSIS_MAX_ATTEMPTS``
+    times (or enqueued `max_enqueues` times) fails with a reason instead, so an analysis that
+    brings the worker down is never queued a third time.
     """
     running = AnalysisRun.objects.filter(status=RunStatus.RUNNING)
-    failed = _fail(
+    failed = give_up(running)  # its worker died under it ANALYSIS_MAX_ATTEMPTS times
+    failed += _fail(
         running.filter(enqueue_count__gte=max_enqueues()),
         INTERRUPTED_TOO_OFTEN_MESSAGE,
         f"interrupted after {max_enqueues()} enqueues",
@@ -130,6 +135,31 @@ def resume_interrupted_runs(enqueue: Callable[[str], object]) -> dict[str, int]:
     if resumed or failed:
         log.info("interrupted analyses: %d queued again, %d failed", resumed, failed)
     return {"resumed": resumed, "failed": failed}
+
+
+def release_lost_run(run_id: str) -> str:
+    """The pool process analysing the run died (killed, out of memory): called by the worker's
+    main process before the message goes back to the queue. The run is QUEUED again at once (its
+    lease is the dead process's), or fails with a reason when it was its last attempt. Returns
+    "failed", "queued" or "" (the run was not RUNNING)."""
+    running = AnalysisRun.objects.filter(pk=run_id, status=RunStatus.RUNNING)
+    if give_up(running):
+        return "failed"
+    queued = running.update(status=RunStatus.QUEUED, stage="", progress=0, lease_token="")
+    return "queued" if queued else ""
+
+
+def fail_timed_out(run_id: str, seconds: float) -> bool:
+    """The hard time limit killed the pool process analysing the run: fail it with its reason
+    (called by the worker's main process; the message is not delivered again)."""
+    failed = _fail(
+        AnalysisRun.objects.filter(pk=run_id, status=RunStatus.RUNNING),
+        time_limit_message(seconds),
+        f"hard time limit ({seconds:.0f} s): the pool process was killed",
+    )
+    if failed:
+        refresh_after_run(run_id)
+    return failed == 1
 
 
 def purge_deleted_patients(now=None) -> int:

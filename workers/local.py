@@ -1,12 +1,19 @@
 """`make run`: the web server and a real Celery worker beside it, with nothing to install.
 
-``python -m workers.local [ADDRESS:PORT]`` starts two processes and stops both when it is stopped
-(Ctrl-C, SIGTERM) or when the server ends; a worker that ends on its own (killed, out of memory)
-is started again, up to ``WORKER_RESTARTS`` times, so uploads keep being analysed:
+``python -m workers.local [ADDRESS:PORT]`` starts two processes and stops both, with everything
+they started, when it is stopped (Ctrl-C, SIGTERM, SIGHUP) or when the server ends: each runs in a
+process group of its own, which gets SIGTERM, then SIGKILL after ``STOP_SECONDS``; each dies with
+the launcher if the launcher itself is killed (the kernel's parent-death signal, Linux), and so do
+the worker's pool and beat processes (workers/celery.py). A worker that ends on its own (killed,
+out of memory) is started again, up to ``WORKER_RESTARTS`` times, so uploads keep being analysed:
 
 * ``celery -A workers worker -B``: consumes every queue and runs the beat schedule (requeue lost
   runs, refresh the attention list …);
-* ``manage.py runserver ADDRESS:PORT`` (daphne: HTTP and the live sessions' WebSockets).
+* ``manage.py runserver ADDRESS:PORT`` (daphne: HTTP and the live sessions' WebSockets), with
+  DEBUG off, so everyone gets the site's own 404 and 500 pages: the launcher generates a secret
+  key once (``DATA_DIR/secret_key``) and serves static files through WhiteNoise; plain HTTP on
+  this machine, so no HTTPS redirect or secure-only cookies. ``DEBUG=1`` (or any of these set in
+  the environment) wins; with DEBUG on, runserver also reloads itself when the code changes.
 
 Both get ``LOCAL_BROKER_DIR`` (``DATA_DIR/broker``): the settings then use kombu's filesystem
 transport, one file per message in that folder, and no eager execution, so an upload returns as
@@ -28,18 +35,35 @@ with a 30 s busy timeout (webapp/settings.py).
 
 from __future__ import annotations
 
+import contextlib
 import os
+import secrets
 import signal
 import subprocess
 import sys
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+
+from workers.limits import die_with_parent
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_ADDRESS = "127.0.0.1:8000"
-STOP_SECONDS = 10.0  # a worker finishing its task gets this long before it is killed
+STOP_SECONDS = 6.0  # a worker finishing its task gets this long before everything is killed
 WORKER_RESTARTS = 5  # a worker that keeps dying is a fault to show, not to hide
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT, signal.SIGHUP)
+# `make run` serves plain HTTP on this machine with DEBUG off: no HTTPS redirect, no secure-only
+# cookies, static files from their folders (webapp/settings.py reads each of these).
+PLAIN_HTTP = {
+    "DEBUG": "0",
+    "SECURE_SSL_REDIRECT": "0",
+    "SESSION_COOKIE_SECURE": "0",
+    "CSRF_COOKIE_SECURE": "0",
+    "SECURE_HSTS_SECONDS": "0",
+    "SECURE_HSTS_INCLUDE_SUBDOMAINS": "0",
+    "SECURE_HSTS_PRELOAD": "0",
+    "WHITENOISE_USE_FINDERS": "1",
+}
 
 
 def data_dir(env: Mapping[str, str]) -> Path:
@@ -55,7 +79,29 @@ def local_env(env: Mapping[str, str]) -> dict[str, str]:
         (broker / sub).mkdir(parents=True, exist_ok=True)
     out["LOCAL_BROKER_DIR"] = str(broker)
     out.setdefault("DJANGO_SETTINGS_MODULE", "webapp.settings")
+    for name, value in PLAIN_HTTP.items():
+        out.setdefault(name, value)
+    if not out.get("SECRET_KEY"):
+        out["SECRET_KEY"] = secret_key(data_dir(out))
     return out
+
+
+def debug_on(env: Mapping[str, str]) -> bool:
+    return env.get("DEBUG", "").strip().lower() in {"1", "true", "yes", "on"}
+
+
+def secret_key(folder: Path) -> str:
+    """This installation's secret key: generated at the first `make run`, kept in ``folder``
+    (readable by its owner only) so sessions survive a restart."""
+    path = folder / "secret_key"
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        descriptor = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:
+        return path.read_text().strip()
+    with os.fdopen(descriptor, "w") as handle:
+        handle.write(secrets.token_urlsafe(50))
+    return path.read_text().strip()
 
 
 def worker_command(env: Mapping[str, str]) -> list[str]:
@@ -70,32 +116,53 @@ def worker_command(env: Mapping[str, str]) -> list[str]:
     ]  # fmt: skip
 
 
-def server_command(address: str) -> list[str]:
-    return [sys.executable, str(ROOT / "manage.py"), "runserver", address]
+def server_command(address: str, *, reload: bool = True) -> list[str]:
+    # Without the reloader the server is one process, which dies with the launcher.
+    options = [] if reload else ["--noreload"]
+    return [sys.executable, str(ROOT / "manage.py"), "runserver", *options, address]
 
 
 def start(command: Sequence[str], env: Mapping[str, str]) -> subprocess.Popen[bytes]:
-    # A session of its own, so stopping it also stops what it started (runserver's reloaded
-    # child, the worker's pool processes).
-    return subprocess.Popen(list(command), env=dict(env), cwd=ROOT, start_new_session=True)
+    # A process group of its own, so stopping it also stops what it started (runserver's
+    # reloaded child, the worker's pool and beat processes); and it dies with this process.
+    return subprocess.Popen(
+        list(command), env=dict(env), cwd=ROOT, start_new_session=True,
+        preexec_fn=die_with(os.getpid()),  # noqa: PLW1509 (the launcher has one thread)
+    )  # fmt: skip
 
 
-def stop(process: subprocess.Popen[bytes], *, group: bool) -> None:
-    """SIGTERM (to the process's group when ``group``: runserver's reloaded child; the worker
-    stops its own pool, ending its task first), then SIGKILL to the group if it lingers."""
-    if process.poll() is not None:
-        return
-    try:
-        if group:
-            os.killpg(process.pid, signal.SIGTERM)
-        else:
-            process.terminate()
-        process.wait(timeout=STOP_SECONDS)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
+def die_with(parent: int) -> Callable[[], None]:
+    """A child's set-up between fork and exec: the parent-death signal; exit at once if the
+    parent already ended before it was set."""
+
+    def setup() -> None:
+        die_with_parent(signal.SIGKILL)
+        if os.getppid() != parent:
+            os._exit(1)
+
+    return setup
+
+
+def signal_group(process: subprocess.Popen[bytes], signum: int) -> None:
+    """Send ``signum`` to the process group ``process`` leads (its stragglers too, once it is
+    gone itself)."""
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(process.pid, signum)
+
+
+def stop_all(server: subprocess.Popen[bytes], worker: subprocess.Popen[bytes]) -> None:
+    """SIGTERM to the server's group and to the worker (which stops its pool, ending its task
+    first), up to ``STOP_SECONDS`` for both, then SIGKILL to both groups: nothing outlives this."""
+    signal_group(server, signal.SIGTERM)
+    if worker.poll() is None:
+        worker.terminate()
+    deadline = time.monotonic() + STOP_SECONDS
+    for process in (server, worker):
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            process.wait(timeout=max(0.0, deadline - time.monotonic()))
+    for process in (server, worker):
+        signal_group(process, signal.SIGKILL)
         process.wait()
-    except ProcessLookupError:
-        pass
 
 
 def ended_how(process: subprocess.Popen[bytes]) -> str:
@@ -110,43 +177,57 @@ def say(message: str) -> None:
 def serve(address: str, env: Mapping[str, str]) -> int:
     """Run the worker and the server until the server ends or this process is told to stop."""
     env = local_env(env)
-    return supervise(worker_command(env), server_command(address), env)
+    server = server_command(address, reload=debug_on(env))
+    return supervise(worker_command(env), server, env)
 
 
 def supervise(
     worker_argv: Sequence[str], server_argv: Sequence[str], env: Mapping[str, str]
 ) -> int:
     """Keep a worker beside the server (restarted when it ends); returns the exit code."""
-    worker = start(worker_argv, env)
-    server = start(server_argv, env)
+    return Supervisor(worker_argv, server_argv, env).run()
 
-    def on_signal(signum: int, frame: object) -> None:
-        raise KeyboardInterrupt
 
-    previous_handler = signal.signal(signal.SIGTERM, on_signal)
-    code = 0
-    restarts = 0
-    try:
-        while server.poll() is None:
-            if worker.poll() is not None:
-                if restarts == WORKER_RESTARTS:
-                    say(f"the worker ended ({ended_how(worker)}) {restarts} times; stopping")
-                    code = worker.returncode or 1
-                    break
-                restarts += 1
-                say(f"the worker ended ({ended_how(worker)}); starting it again")
-                worker = start(worker_argv, env)
-            time.sleep(0.5)
-        else:
-            code = server.returncode or 0
-            say(f"the server ended ({ended_how(server)}); stopping the worker")
-    except KeyboardInterrupt:
-        pass
-    finally:
-        stop(server, group=True)
-        stop(worker, group=False)
-        signal.signal(signal.SIGTERM, previous_handler)
-    return code
+class Supervisor:
+    """The server and the worker now running (a restarted one, after a death)."""
+
+    def __init__(
+        self, worker_argv: Sequence[str], server_argv: Sequence[str], env: Mapping[str, str]
+    ) -> None:
+        self.worker_argv, self.server_argv, self.env = worker_argv, server_argv, env
+        self.stopping: list[int] = []
+
+    def on_signal(self, signum: int, frame: object) -> None:
+        self.stopping.append(signum)
+
+    def run(self) -> int:
+        previous = {signum: signal.signal(signum, self.on_signal) for signum in STOP_SIGNALS}
+        self.worker = start(self.worker_argv, self.env)
+        self.server = start(self.server_argv, self.env)
+        try:
+            return self.watch()
+        finally:
+            stop_all(self.server, self.worker)
+            for signum, handler in previous.items():
+                signal.signal(signum, handler)
+
+    def watch(self) -> int:
+        """Until the server ends or a stop signal comes: restart the worker when it ends."""
+        for restarts in range(WORKER_RESTARTS + 1):
+            while self.server.poll() is None and self.worker.poll() is None and not self.stopping:
+                time.sleep(0.2)
+            if self.stopping:
+                say(f"stopping ({signal.Signals(self.stopping[0]).name})")
+                return 0
+            if self.server.poll() is not None:
+                say(f"the server ended ({ended_how(self.server)}); stopping the worker")
+                return self.server.returncode or 0
+            signal_group(self.worker, signal.SIGKILL)  # what the dead worker left behind
+            if restarts < WORKER_RESTARTS:
+                say(f"the worker ended ({ended_how(self.worker)}); starting it again")
+                self.worker = start(self.worker_argv, self.env)
+        say(f"the worker ended ({ended_how(self.worker)}) {WORKER_RESTARTS} times; stopping")
+        return self.worker.returncode or 1
 
 
 def main(argv: Sequence[str]) -> int:

@@ -9,6 +9,7 @@ from typing import Any
 from celery import shared_task
 
 from workers import analysis_task, exercise_models, housekeeping, inspection, reports, training
+from workers.task_guard import AnalysisTask
 
 
 @shared_task(name="workers.tasks.inspect_recording", autoretry_for=(OSError,), max_retries=3)
@@ -34,6 +35,7 @@ def retry_delay(retries: int) -> int:
 
 @shared_task(
     bind=True,
+    base=AnalysisTask,  # a pool process killed by the hard time limit or otherwise: task_guard
     name="workers.tasks.analyse_recording",
     max_retries=TRANSIENT_RETRIES,
     ignore_result=True,
@@ -91,6 +93,14 @@ def refresh_attention() -> int:
 def purge_deleted_patients() -> int:
     """Hard-delete patients soft-deleted longer ago than PATIENT_RETENTION_DAYS, with files."""
     return housekeeping.purge_deleted_patients()
+
+
+@shared_task(name="workers.tasks.send_reminders", ignore_result=True)
+def send_reminders() -> int:
+    """E-mail today's reminders to patients behind their sessions this week (daily, by beat)."""
+    from webapp.patients.reminders import send_reminders as send
+
+    return send()
 
 
 @shared_task(name="workers.tasks.build_exercise_model")

@@ -37,13 +37,22 @@ from webapp.recordings.storage import read_verified
 MIN_PER_CLASS = 2
 
 
+def of_exercise(exercise: Exercise) -> Q:
+    """Runs of the exercise's recordings analysed with its model: a recording moved to another
+    exercise keeps its earlier runs, whose corrections speak of the other exercise's key poses;
+    a deleted recording teaches nothing."""
+    return Q(recording__exercise=exercise, recording__deleted_at__isnull=True) & (
+        Q(model__isnull=True) | Q(model__exercise=exercise)
+    )
+
+
 def corrected_runs(exercise: Exercise):
     return (
         AnalysisRun.objects.filter(
             Q(landmark_fixes__isnull=False)
             | Q(assessment_fixes__isnull=False)
             | Q(repetition_labels__isnull=False),
-            recording__exercise=exercise,
+            of_exercise(exercise),
         )
         .distinct()
         .select_related("recording")
@@ -134,7 +143,9 @@ def rebuild_models_with_corrections(enqueue: Callable[[str], object]) -> list[st
 
 def threshold_data(exercise: Exercise) -> tuple[list[float], list[bool]]:
     scores, failed = [], []
-    labels = RepetitionLabel.objects.filter(run__recording__exercise=exercise).select_related("run")
+    labels = RepetitionLabel.objects.filter(
+        run__in=AnalysisRun.objects.filter(of_exercise(exercise))
+    ).select_related("run")
     for label in labels:
         repetitions = label.run.result.repetitions if label.run.result else ()
         if label.index < len(repetitions):

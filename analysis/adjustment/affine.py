@@ -291,10 +291,13 @@ def _synchronised_tutor(
     if tutor_root not in ("own", "patient"):
         raise ValueError(f"tutor_root must be 'own' or 'patient', got {tutor_root!r}")
     pairs = synchronise_landmarks(patient.landmark_types, tutor.landmark_types)
-    fmap = tutor_frame_map(
-        pairs, patient.landmark_frames, tutor.landmark_frames, len(patient.local_q),
-        tutor_types=tutor.landmark_types,
-    )  # fmt: skip
+    if pairs:
+        fmap = tutor_frame_map(
+            pairs, patient.landmark_frames, tutor.landmark_frames, len(patient.local_q),
+            tutor_types=tutor.landmark_types,
+        )  # fmt: skip
+    else:  # no key pose to pair (none found, or none of the tutor's types): the tutor's own pace
+        fmap = np.arange(len(patient.local_q), dtype=np.float64) % len(tutor.local_q)
     tutor_t = sample_linear(tutor.local_t, fmap)
     if tutor_root == "patient":
         roots = skeleton.parents < 0

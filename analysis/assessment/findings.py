@@ -2,63 +2,105 @@
 
 The feedback's corrections (`analysis.feedback.advice`) are built from these findings: per
 anatomical angle (`analysis.clinical`), each repetition's range (max − min, degrees) against the
-median range of the tutor's repetitions, and each repetition's duration against the tutor's.
+median range of the tutor's repetitions, each repetition's posture (the middle of its range)
+against the tutor's, and each repetition's duration against the tutor's.
+
+Only what the exercise trains is corrected (issue 26): the *involved* angles are those the tutor
+moves at least `INVOLVED_SHARE` of its most-moved angle (and `MOVED_DEG`), one per joint (the
+shoulder's flexion, abduction and elevation are one arm: its elevation speaks for it when moved
+that much, else the angle the tutor moves most), narrowed to the joints the therapist ticked
+when any is among them (`involved_angles`). So a part is never both "as far as the
+demonstration" and "too little", and a squat's arms, swung for balance, are not corrected.
+Compensations are the trunk's: its lean held through the movement (posture) and its movement
+where the tutor keeps it still; and those `analysis.assessment.compensations` measures from
+positions (rotation, shoulder hike, knee valgus), passed in as further "angles".
 
 Each angle's tolerance is its own: max(`TOLERANCE_DEG`, `SPREAD_FACTOR` × the spread of its range
 over the tutor's repetitions, `TOLERANCE_SHARE` of the tutor's range). A noisy angle (a Kinect
 ankle whose range wanders by 20° between the tutor's own repetitions) gets a wide one.
 
-- ``less``: the tutor moves the angle (range ≥ `MOVED_DEG`) and a repetition covers less than
-  the tutor's range minus the tolerance.
-- ``more``: a repetition covers more than the tutor's range plus the tolerance.
-- ``extra``: the tutor keeps the angle (nearly) still and a repetition moves it by more than
-  max(`EXTRA_DEG`, `SPREAD_FACTOR` × spread) beyond the tutor's range (a compensation: the trunk
-  leaning in a shoulder raise).
+- ``less``: an involved angle covers less than the tutor's range minus the tolerance; the amount
+  is the loss in the patient's excursion (tutor's range − the patient's, degrees of that angle).
+- ``more``: an involved angle covers more than the tutor's range plus the tolerance.
+- ``extra``: the trunk moves by more than max(`EXTRA_DEG`, `SPREAD_FACTOR` × spread) beyond the
+  tutor's range where the tutor keeps it (nearly) still (leaning in a shoulder raise); or a
+  compensation of `analysis.assessment.compensations` (the trunk turning, a shoulder hiked, a
+  knee falling inward) ranges beyond the tutor's by more than its own limit.
+- ``held`` / ``held_back``: the trunk's posture over a repetition (the middle of its range) is
+  more than `HELD_DEG` off the tutor's, forward (or to the right) / backward (to the left): a lean
+  held all through, which a range does not show.
 - ``fast`` / ``slow``: a repetition lasts less than `FAST_BELOW` or more than `SLOW_ABOVE`
   times the tutor's.
-- ``good``: an angle the tutor moves that no repetition got wrong: what went well.
+- ``good``: an involved angle that no repetition got wrong: what went well.
 
-Feedback agrees with the score: a difference counts in a repetition that did not pass; in one that
-passed only when it is `PLAIN_FACTOR` times the tolerance (plain to see whatever the score), and
-tempo not at all. Between-subject differences in angles the score does not weigh (how far a
-healthy person lifts the arms in a squat) then stop being corrections of good repetitions: on
-UI-PRMD, 87 % of correct sessions get at most one correction, 82 % of incorrect ones at least one.
-A finding counts when it happens in at least `MIN_SHARE` of the repetitions (one of two is
-enough); its amount is the median difference over those repetitions; corrections are ranked by
-size (degrees off times how often). Ranges, not single values,
-are compared: where the patient stands and how the rig zeroes an angle do not matter, and a
-one-sided exercise done with the other side is compared side for side (``mirrored``).
-Thresholds are wide on purpose (goniometer repeatability is 5–10°, Kinect-class joint angles
-wander more): a correction is worth giving only when the difference is plain to see.
+Feedback agrees with the score, both ways. A plain error fails its repetition whatever its score
+(`plainly_off`, applied by `analysis.pipeline.advice_stage`): a main angle (an involved one the
+tutor moves at least `MAIN_SHARE` as far as its most-moved) covering less than `PLAIN_SHARE` of
+the tutor's range in a repetition short of `PLAIN_REACH` along the movement, or the trunk held
+more than `PLAIN_LEAN_DEG` off the tutor's posture. And a difference counts only in a repetition
+that did not pass, and a recording that passed is told at most small tips (below `SMALL_DEG`;
+with the tolerances above, that is no angle correction at all). A finding counts when it happens
+in at least `MIN_SHARE` of the repetitions; its amount is the median difference over those
+repetitions. Corrections are ranked the angles' first (the involved ones and the trunk's), then the
+compensations measured from positions (noisier), then tempo, each by size (degrees off times how
+often): only involved angles, the trunk and the compensations are ever corrected. Ranges and
+postures, not single values, are compared; a one-sided exercise done with the other side is compared
+side for side (``mirrored``). Thresholds are wide on purpose (goniometer repeatability is 5–10°,
+Kinect-class joint angles wander more).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from analysis.assessment.compensations import limit_of
+
 MOVED_DEG = 20.0
+INVOLVED_SHARE = 0.6  # of the tutor's most-moved angle: an angle the exercise trains
 TOLERANCE_DEG = 15.0
 TOLERANCE_SHARE = 0.3
 EXTRA_DEG = 20.0
+MAIN_SHARE = 0.8  # of the involved angles' largest tutor range: a main angle of the exercise
+PLAIN_SHARE = 0.7  # a main angle covering less of the tutor's range fails its repetition
+PLAIN_REACH = 0.75  # ... in a repetition that went less of the way along the movement
+PLAIN_LEAN_DEG = 15.0  # so does the trunk held further off the tutor's posture
+HELD_DEG = 12.0  # the trunk's posture off the tutor's by more: a lean held all through
+SMALL_DEG = 10.0  # a recording that passed is told only differences below this (° or %)
 FAST_BELOW, SLOW_ABOVE = 0.6, 1.8
 MIN_SHARE = 0.4
 SPREAD_FACTOR = 2.0  # times the tutor's own spread (SD of the range over its repetitions)
-PLAIN_FACTOR = 3.0  # times the tolerance: said even for a repetition that passed
-KINDS = ("less", "more", "extra", "fast", "slow", "good")
+TRUNK = ("trunk_flexion", "trunk_lateral_flexion")
+PREFERRED = "shoulder_elevation"  # speaks for the arm when moved: the arm's angle to the trunk
+KINDS = ("less", "more", "extra", "held", "held_back", "fast", "slow", "good")
 
 
 @dataclass(frozen=True)
 class RepetitionMeasures:
     """One repetition of the recording: its first frame, each angle's range (degrees), its
-    duration over the tutor's (tempo) and whether its score passed."""
+    duration over the tutor's (tempo), whether its score passed, each angle's posture (the
+    middle of its range, degrees) and how far it went along the movement (None: unknown)."""
 
     start: int
     ranges: Mapping[str, float]
     tempo: float
     passed: bool = False
+    middles: Mapping[str, float] = field(default_factory=dict)
+    reach: float | None = None  # along the exercise's progress axis, 1 = as far as the tutor
+
+
+@dataclass(frozen=True)
+class Reference:
+    """What the tutor does, per angle: the median range over its repetitions, that range's SD
+    (``spread``), the median posture (``middles``), and the angles the exercise trains
+    (``involved``; None: `involved_angles` of the ranges)."""
+
+    ranges: Mapping[str, float]
+    spread: Mapping[str, float] = field(default_factory=dict)
+    middles: Mapping[str, float] = field(default_factory=dict)
+    involved: Collection[str] | None = None
 
 
 @dataclass(frozen=True)
@@ -67,8 +109,9 @@ class Finding:
 
     ``angle``: the clinical angle on the patient's own side ("" for tempo); ``amount``: degrees
     (angles) or percent of the tutor's duration off (tempo); ``tutor`` / ``patient``: the tutor's
-    range and the patient's median range (degrees), or durations in percent of the tutor's
-    (tempo); ``repetitions``: 1-based numbers where it happened; ``frame``: the first one's start.
+    range and the patient's median range (degrees; postures for ``held``), or durations in
+    percent of the tutor's (tempo); ``repetitions``: 1-based numbers where it happened;
+    ``frame``: the first one's start.
     """
 
     kind: str
@@ -102,6 +145,56 @@ def swapped_side(name: str) -> str:
     return name
 
 
+def joint_of(name: str) -> str:
+    """The joint an angle belongs to: "shoulder_left" for "shoulder_elevation_left", "trunk"."""
+    side = next((s for s in ("_left", "_right") if name.endswith(s)), "")
+    return name.split("_", maxsplit=1)[0] + side
+
+
+def involved_angles(tutor: Mapping[str, float], ticked: Collection[str] = ()) -> set[str]:
+    """The angles the exercise trains (module docstring): moved by the tutor at least
+    `INVOLVED_SHARE` of its most-moved angle, one per joint (the shoulder's elevation when it is
+    moved that much, else the joint's most-moved angle); ``ticked``: joints
+    ("knee_left", "shoulder_right", `joint_of`) the therapist chose, which narrow the set when
+    any of them is in it."""
+    top = max(tutor.values(), default=0.0)
+    limit = max(MOVED_DEG, INVOLVED_SHARE * top)
+    best: dict[str, str] = {}
+    for name, value in sorted(tutor.items(), key=lambda item: (PREFERRED in item[0], item[1])):
+        if value >= limit:
+            best[joint_of(name)] = name  # the last: the preferred angle, else the most moved
+    narrowed = {n for j, n in best.items() if j in ticked}
+    return narrowed or set(best.values())
+
+
+def main_angles(ref: Reference) -> set[str]:
+    """The involved angles the tutor moves at least `MAIN_SHARE` as far as its most-moved one."""
+    chosen = involved_angles(ref.ranges) if ref.involved is None else set(ref.involved)
+    top = max((ref.ranges.get(n, 0.0) for n in chosen), default=0.0)
+    return {n for n in chosen if ref.ranges.get(n, 0.0) >= MAIN_SHARE * top}
+
+
+def plainly_off(rep: RepetitionMeasures, ref: Reference, mirrored: bool = False) -> bool:
+    """Whether a repetition's error is plain to see whatever its score: a main angle covering
+    less than `PLAIN_SHARE` of the tutor's range (55 % of an excursion) in a repetition that also
+    went less than `PLAIN_REACH` of the way along the movement (when known: a tutor's angle the
+    patient need not copy, e.g. a bent elbow in a shoulder extension, fails nobody who went all
+    the way), or the trunk held more than `PLAIN_LEAN_DEG` off the tutor's posture (a 20° lean)."""
+    short_of_it = rep.reach is None or rep.reach < PLAIN_REACH
+    for name in main_angles(ref) if short_of_it else ():
+        own = rep.ranges.get(swapped_side(name) if mirrored else name)
+        if own is not None and own < PLAIN_SHARE * ref.ranges[name]:
+            return True
+    for name in TRUNK:
+        if name in ref.middles and name in rep.middles:
+            tutor = (
+                -ref.middles[name] if mirrored and name != "trunk_flexion" else ref.middles[name]
+            )
+            if abs(rep.middles[name] - tutor) > PLAIN_LEAN_DEG:
+                return True
+    return False
+
+
 def _finding(kind: str, angle: str, tutor: float, hits: list[tuple[int, float, float]],
              total: int) -> Finding | None:  # fmt: skip
     """A finding from its (repetition index, amount, patient value) hits, if frequent enough."""
@@ -115,8 +208,22 @@ def _finding(kind: str, angle: str, tutor: float, hits: list[tuple[int, float, f
 
 
 def _off(reps: Sequence[RepetitionMeasures], k: int, difference: float, tolerance: float) -> bool:
-    """Whether repetition k's difference counts (module docstring: it agrees with the score)."""
-    return difference > tolerance * (PLAIN_FACTOR if reps[k].passed else 1.0)
+    """Whether repetition k's difference counts: beyond the tolerance, in a failed repetition."""
+    return difference > tolerance and not reps[k].passed
+
+
+def _range_findings(reps: Sequence[RepetitionMeasures], name: str, own: float,
+                    tolerance: float) -> list[Finding | None]:  # fmt: skip
+    """``less`` / ``more`` / ``good`` of one involved angle (its tutor range ``own``)."""
+    values = [(k, r.ranges[name]) for k, r in enumerate(reps) if name in r.ranges]
+    less = [(k, own - v, v) for k, v in values if _off(reps, k, own - v, tolerance)]
+    more = [(k, v - own, v) for k, v in values if _off(reps, k, v - own, tolerance)]
+    found = [_finding("less", name, own, less, len(reps)),
+             _finding("more", name, own, more, len(reps))]  # fmt: skip
+    if all(abs(v - own) <= tolerance for _, v in values):  # passed or not
+        found.append(_finding("good", name, own, [(k, abs(v - own), v) for k, v in values],
+                              len(reps)))  # fmt: skip
+    return found
 
 
 def angle_findings(
@@ -124,32 +231,47 @@ def angle_findings(
     tutor: Mapping[str, float],
     mirrored: bool = False,
     spread: Mapping[str, float] | None = None,
+    involved: Collection[str] | None = None,
 ) -> list[Finding]:
-    """Findings of every angle both the recording and the tutor have (module docstring);
-    ``spread``: the SD of each angle's range over the tutor's repetitions (0 when unknown)."""
-    out: list[Finding] = []
+    """Findings of the involved angles and the trunk's movement (module docstring);
+    ``spread``: the SD of each angle's range over the tutor's repetitions (0 when unknown);
+    ``involved``: the angles the exercise trains, tutor's side (None: `involved_angles`)."""
+    chosen = involved_angles(tutor) if involved is None else set(involved)
+    out: list[Finding | None] = []
     for name in sorted({n for r in reps for n in r.ranges}):
         key = swapped_side(name) if mirrored else name
         own = tutor.get(key)
         if own is None:
             continue
-        values = [(k, r.ranges[name]) for k, r in enumerate(reps) if name in r.ranges]
         wander = SPREAD_FACTOR * (spread or {}).get(key, 0.0)
-        tolerance = max(TOLERANCE_DEG, wander, TOLERANCE_SHARE * own)
-        if own >= MOVED_DEG:
-            less = [(k, own - v, v) for k, v in values if _off(reps, k, own - v, tolerance)]
-            more = [(k, v - own, v) for k, v in values if _off(reps, k, v - own, tolerance)]
-            found = [_finding("less", name, own, less, len(reps)),
-                     _finding("more", name, own, more, len(reps))]  # fmt: skip
-            if all(abs(v - own) <= tolerance for _, v in values):  # passed or not
-                good = [(k, abs(v - own), v) for k, v in values]
-                found.append(_finding("good", name, own, good, len(reps)))
-        else:
-            limit = max(EXTRA_DEG, wander)
+        if key in chosen:
+            out += _range_findings(reps, name, own, max(TOLERANCE_DEG, wander,
+                                                         TOLERANCE_SHARE * own))  # fmt: skip
+        elif (key in TRUNK and own < MOVED_DEG) or limit_of(key) is not None:
+            limit = max(limit_of(key) or EXTRA_DEG, wander)
+            values = [(k, r.ranges[name]) for k, r in enumerate(reps) if name in r.ranges]
             extra = [(k, v - own, v) for k, v in values if _off(reps, k, v - own, limit)]
-            found = [_finding("extra", name, own, extra, len(reps))]
-        out += [f for f in found if f is not None]
-    return out
+            out.append(_finding("extra", name, own, extra, len(reps)))
+    return [f for f in out if f is not None]
+
+
+def posture_findings(
+    reps: Sequence[RepetitionMeasures], middles: Mapping[str, float], mirrored: bool = False
+) -> list[Finding]:
+    """A trunk lean held through the movement (``held``: forward or to the right, ``held_back``:
+    backward or to the left), the repetitions' postures against the tutor's ``middles``."""
+    out: list[Finding | None] = []
+    for name in TRUNK:
+        if name not in middles:
+            continue
+        own = -middles[name] if mirrored and name == "trunk_lateral_flexion" else middles[name]
+        values = [(k, r.middles[name] - own, r.middles[name]) for k, r in enumerate(reps)
+                  if name in r.middles]  # fmt: skip
+        ahead = [(k, d, v) for k, d, v in values if _off(reps, k, d, HELD_DEG)]
+        behind = [(k, -d, v) for k, d, v in values if _off(reps, k, -d, HELD_DEG)]
+        out += [_finding("held", name, own, ahead, len(reps)),
+                _finding("held_back", name, own, behind, len(reps))]  # fmt: skip
+    return [f for f in out if f is not None]
 
 
 def tempo_findings(reps: Sequence[RepetitionMeasures]) -> list[Finding]:
@@ -165,26 +287,44 @@ def tempo_findings(reps: Sequence[RepetitionMeasures]) -> list[Finding]:
 
 def findings(
     reps: Sequence[RepetitionMeasures],
-    tutor: Mapping[str, float],
+    tutor: Mapping[str, float] | Reference,
     mirrored: bool = False,
     spread: Mapping[str, float] | None = None,
+    *,
+    passed: bool = False,
+    extra: Sequence[Finding] = (),
 ) -> list[Finding]:
     """Every finding of the recording, corrections first by weight, then what went well; each
-    with the frame where its first repetition starts (``spread``: see `angle_findings`)."""
+    with the frame where its first repetition starts. ``tutor``: a `Reference` (or only its
+    ranges, with ``spread``: see `angle_findings`); ``passed``: the recording passed, so only
+    corrections below `SMALL_DEG` are kept; ``extra``: compensations found elsewhere
+    (`analysis.assessment.compensations`)."""
     if not reps:
         return []
-    found = angle_findings(reps, tutor, mirrored, spread) + tempo_findings(reps)
+    ref = tutor if isinstance(tutor, Reference) else Reference(tutor, spread or {})
+    found = [
+        *angle_findings(reps, ref.ranges, mirrored, ref.spread, ref.involved),
+        *posture_findings(reps, ref.middles, mirrored), *extra, *tempo_findings(reps),
+    ]  # fmt: skip
+    kept = [f for f in found if f.kind == "good" or not passed or f.amount < SMALL_DEG]
     placed = [
         Finding(f.kind, f.angle, f.amount, f.tutor, f.patient, f.repetitions,
                 reps[f.repetitions[0] - 1].start, f.share)
-        for f in found
+        for f in kept
     ]  # fmt: skip
-    return sorted(placed, key=lambda f: (f.kind == "good", -f.weight if f.kind != "good" else
-                                         -f.tutor))  # fmt: skip
+    return sorted(placed, key=_rank)
+
+
+def _rank(f: Finding) -> tuple[int, float]:
+    """Corrections first: the angles' (the involved ones', the trunk's), then the compensations
+    measured from positions, then tempo, each by weight; then what went well, largest first."""
+    if f.kind == "good":
+        return 3, -f.tutor
+    return (2 if not f.angle else 1 if limit_of(f.angle) is not None else 0), -f.weight
 
 
 def tutor_ranges(per_repetition: Sequence[Mapping[str, float]]) -> dict[str, float]:
-    """The median range (degrees) of each angle over the tutor's repetitions."""
+    """The median of each angle's value (range, or posture) over the tutor's repetitions."""
     names = {n for r in per_repetition for n in r}
     return {n: float(np.median([r[n] for r in per_repetition if n in r])) for n in names}
 

@@ -3,10 +3,12 @@
 The parser walks a token stream with an explicit stack, so a deeply nested (or maliciously deep)
 hierarchy ends in a clear `BVHError` instead of a recursion error.
 
-Three quirks that common readers (Blender, bvhio, PyMO) accept are read with a warning in
+Four quirks that common readers (Blender, bvhio, PyMO) accept are read with a warning in
 `Hierarchy.warnings` instead of an error: a first joint declared with ``JOINT`` instead of
-``ROOT``; words after ``End Site`` on its line (``End Site LeftToe_End``); and a line inside a joint
-that starts with an unknown keyword (``JOINTTYPE ball``, ``ROTATIONORDER ZXY``), which is skipped.
+``ROOT``; words after ``End Site`` on its line (``End Site LeftToe_End``); digits glued to it
+(``End Site4``, read as ``End Site``; any other word there is still an error); and a line inside a
+joint that starts with an unknown keyword (``JOINTTYPE ball``, ``ROTATIONORDER ZXY``), which is
+skipped.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ MAX_JOINTS = 1024
 MAX_DEPTH = 256
 _COUNTS = frozenset("0123456")
 _KEYWORD = re.compile(r"[A-Za-z_][A-Za-z0-9_.:-]*")
+_NUMBERED_SITE = re.compile(r"Site[0-9]+")
 
 
 @dataclass
@@ -138,7 +141,10 @@ def open_joint(stream: TokenStream, tree: Hierarchy, parent: int, line: int) -> 
 
 def read_end_site(stream: TokenStream, tree: Hierarchy, parent: int, line: int) -> None:
     site, _ = stream.next("'Site'")
-    if site != "Site":
+    if _NUMBERED_SITE.fullmatch(site):
+        # 'End Site4': an exporter numbering its End Sites; the number names nothing.
+        tree.warnings.append(f"line {line}: read 'End {site[:40]}' as 'End Site'")
+    elif site != "Site":
         raise BVHError(f"expected 'End Site' but found 'End {site}'", line)
     stray = stream.rest_of_line(line)
     if stray:

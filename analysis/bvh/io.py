@@ -20,8 +20,9 @@ was bent (the reader never warns about a clean file):
   one `analysis.kinematics` uses. The reader chooses per file: *added* when the values' mean
   magnitude is under a quarter of their mean distance from the OFFSET and under half the OFFSET's
   mean magnitude (values near zero, offsets clearly not), and then adds the OFFSET to those
-  columns; otherwise *replacing*, unchanged. Both give a warning. Where the OFFSETs are zero the
-  two conventions agree.
+  columns, and the root's OFFSET to the root's (that exporter writes displacements from the rest
+  place for every joint: MakeHuman's ``benchmark.bvh``); otherwise *replacing*, unchanged.
+  Both give a warning. Where the OFFSETs are zero the two conventions agree.
 
 Malformed input still raises `BVHError` with the line.
 """
@@ -245,6 +246,21 @@ def _non_root_position_columns(skeleton: Skeleton) -> list[tuple[int, int, int]]
     return out
 
 
+def _add_root_offset(skeleton: Skeleton, frames: FloatArray) -> bool:
+    """In a file whose exporter adds position channels to the OFFSET (MakeHuman's
+    ``benchmark.bvh``: every joint's values are displacements from its rest place), the root's
+    values are displacements too: add its OFFSET in place. Whether anything was added."""
+    root = int(np.flatnonzero(skeleton.parents < 0)[0])
+    start = int(skeleton.channel_starts[root])
+    added = False
+    for k, channel in enumerate(skeleton.channels[root]):
+        axis_offset = skeleton.offsets[root, "XYZ".index(channel[0])]
+        if channel.endswith("position") and axis_offset != 0.0:
+            frames[:, start + k] += axis_offset
+            added = True
+    return added
+
+
 def _position_convention(skeleton: Skeleton, frames: FloatArray, warnings: list[str]) -> FloatArray:
     """Frames whose non-root position channels replace the OFFSET (see the module docstring)."""
     columns = _non_root_position_columns(skeleton)
@@ -259,9 +275,11 @@ def _position_convention(skeleton: Skeleton, frames: FloatArray, warnings: list[
     if size > 1e-9 and as_added < 0.25 * as_replacing and as_added < 0.5 * size:
         frames = frames.copy()
         frames[:, [c for _, _, c in columns]] += offsets
+        root_too = _add_root_offset(skeleton, frames)
         warnings.append(
             f"position channels on {n_joints} joints other than the root hold values near zero: "
             "they were read as added to each joint's OFFSET"
+            + (" (the root's too)" if root_too else "")
         )
     else:
         warnings.append(

@@ -29,7 +29,6 @@ stands in. Points are numbered joints first, then End Sites (J + k).
 
 from __future__ import annotations
 
-import itertools
 import re
 from collections.abc import Sequence
 
@@ -229,10 +228,12 @@ def _settle(
         if joint is not None:
             roles[role] = joint
     for chain in (ARM, LEG):
-        present = [r for r in chain if r in roles]
-        for upper, lower in itertools.pairwise(present):
-            if lower in roles and not is_ancestor(parents, roles[upper], roles[lower]):
-                del roles[lower]
+        kept = None  # a limb part below one that was dropped is checked against the one above it
+        for role in [r for r in chain if r in roles]:
+            if kept is not None and not is_ancestor(parents, roles[kept], roles[role]):
+                del roles[role]
+            else:
+                kept = role
     return roles
 
 

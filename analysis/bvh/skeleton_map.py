@@ -8,8 +8,8 @@ maps onto a model when every joint the model needs is found either by its own na
 row of the table; otherwise `SkeletonMismatchError` names the joints that are missing.
 
 This matches names only, for callers that have no skeleton. Recordings of other rigs are put on an
-exercise's skeleton by `analysis.bvh.map_onto` (`analysis.bvh.rigs` finds the body parts by names,
-chain and rest pose; `analysis.bvh.retarget` transfers the segment rotations).
+exercise's skeleton by `analysis.kinematics.map_onto` (`analysis.bvh.rigs` finds the body parts by
+names, chain and rest pose; `analysis.kinematics.retarget` transfers the segment rotations).
 """
 
 from __future__ import annotations

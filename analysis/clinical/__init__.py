@@ -8,6 +8,9 @@ Public API:
 - `angle_ranges(series, start=None, end=None) -> dict[str, AngleRange]`: min/max per angle over
   a recording or a repetition (frames ``start..end`` inclusive).
 - `clinical_angles(motion) -> dict[str, AngleRange]`: both in one call, whole recording.
+- `measure(motion) -> Measured(series, notes)`: the series of the angles the recording measures
+  and, per other angle, why not (``clinical_notes``: a segment the skeleton lacks, or readings
+  beyond the body's physiological limits, `LIMITS`).
 - `Norm`, `NORMS`, `norm_for(name)`: normal adult active ranges (AAOS).
 - `Workspace`, `reachable_workspace(motion, start=None, end=None)`,
   `workspace_from_points(points, side)`: reachable workspace of each hand (relative surface
@@ -16,8 +19,15 @@ Public API:
 Conventions and sources: docs/sections/clinical.md. Numpy, scipy and trimesh only.
 """
 
-from analysis.clinical.angles import ANGLE_NAMES, angle_ranges, angle_series, clinical_angles
-from analysis.clinical.norms import NORMS, Norm, norm_for
+from analysis.clinical.angles import (
+    ANGLE_NAMES,
+    angle_ranges,
+    angle_series,
+    clinical_angles,
+    measure,
+)
+from analysis.clinical.measured import Measured
+from analysis.clinical.norms import LIMITS, NORMS, Norm, limits_for, norm_for
 from analysis.clinical.workspace import (
     QUADRANTS,
     Workspace,
@@ -27,13 +37,17 @@ from analysis.clinical.workspace import (
 
 __all__ = [
     "ANGLE_NAMES",
+    "LIMITS",
     "NORMS",
     "QUADRANTS",
+    "Measured",
     "Norm",
     "Workspace",
     "angle_ranges",
     "angle_series",
     "clinical_angles",
+    "limits_for",
+    "measure",
     "norm_for",
     "reachable_workspace",
     "workspace_from_points",

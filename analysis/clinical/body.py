@@ -16,12 +16,13 @@ connectors, not segments. From the joints:
 Every segment frame has the ISB axes (Wu et al. 2002, 2005): X anterior, Y superior (the long
 axis, primary) and Z to the right, on both sides. The trunk's zero is the rest pose's body frame
 (upright, facing away from the hip line): rigs stand upright in their rest pose, whatever they do
-with the arms, and a rig whose rest spine leans more than 45° (Rokoko's every-bone-along-x
-exports) gives no trunk, hip or shoulder angles. Limb zeros never come from the rest pose (T-, A-
-or anatomical arms), only the segments' directions do. Two computations give the same geometry:
-``orientation`` turns the rest-pose axes by the segments' global rotations (forward kinematics of
-the BVH channels); ``positions`` builds the frames from the joints' world positions alone (the
-cross-check, and what a positions-only sensor would give).
+with the arms. A rig whose rest trunk does not stand within 45° of the vertical (Bandai-Namco's
+and Rokoko's every-bone-along-local-x exports) gets its trunk frames from its bones' positions
+instead (`trunk_from_points`) and the vertical from the take (`take_vertical`). Limb zeros never
+come from the rest pose (T-, A- or anatomical arms), only the segments' directions do. Two
+computations give the same geometry: ``orientation`` turns the rest-pose axes by the segments'
+global rotations (forward kinematics of the BVH channels); ``positions`` builds the frames from
+the joints' world positions alone (the cross-check, and what a positions-only sensor would give).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh import Motion, Skeleton
-from analysis.bvh.rigs import identify
+from analysis.bvh.rigs import identify, rest_points
 from analysis.bvh.skeleton_map import SYNONYMS, normalise_name
 from analysis.kinematics import positions
 from analysis.kinematics import quaternions as quat
@@ -42,7 +43,8 @@ from analysis.kinematics.forward_kinematics import global_rotations
 FloatArray = npt.NDArray[np.float64]
 SIDES = ("left", "right")
 SIDE_SIGN = {"left": -1.0, "right": 1.0}  # along Z (to the right)
-UP = np.array([0.0, 1.0, 0.0])  # BVH files are y-up (analysis.kinematics.UP_AXIS)
+UP = np.array([0.0, 1.0, 0.0])  # most BVH files are y-up (analysis.kinematics.UP_AXIS)
+Z_UP = np.array([0.0, 0.0, 1.0])  # Blender / MakeHuman / FAIR exports stand along +z
 
 # First name of a SYNONYMS row -> the role it plays here.
 _ROLE_OF_ROW = {
@@ -136,6 +138,8 @@ class Body:
     pelvis: Frame | None
     thorax: Frame | None
     limbs: dict[str, tuple[int, int]] = field(default_factory=dict)  # "thigh_left" -> (a, b)
+    up: FloatArray = field(default_factory=lambda: UP)  # the file's vertical
+    upright: bool = True  # the rest pose stands along ``up`` (the trunk's zero is its frame)
 
 
 def _common_ancestor(skeleton: Skeleton, pair: tuple[int, int]) -> int | None:
@@ -145,7 +149,9 @@ def _common_ancestor(skeleton: Skeleton, pair: tuple[int, int]) -> int | None:
 
 def _trunk_chain(skeleton: Skeleton, joints: dict[str, int]) -> list[int] | None:
     """Joints from the pelvis joint up to the base of the neck, pelvis first, without the
-    zero-length connectors some rigs put between them (CMU's ``LowerBack``, ``Neck``)."""
+    zero-length connectors some rigs put between them (CMU's ``LowerBack``, ``Neck``). Where the
+    spine does not hang below the hips' joint (MakeHuman: legs and spine are siblings under the
+    root), the chain starts at the two's common ancestor."""
     hips = _lateral_pair(joints, "hip")
     pelvis = None if hips is None else _common_ancestor(skeleton, hips)
     top = joints.get("neck", joints.get("chest"))
@@ -153,15 +159,27 @@ def _trunk_chain(skeleton: Skeleton, joints: dict[str, int]) -> list[int] | None
         return None
     chain = _ancestors(skeleton, top)
     if pelvis not in chain[1:]:
-        return None
+        pelvis = _common_ancestor(skeleton, (pelvis, top))
+        if pelvis is None:
+            return None
     rest = rest_positions(skeleton)
     kept = [pelvis]
     for joint in chain[: chain.index(pelvis)][::-1]:
         if np.linalg.norm(rest[joint] - rest[kept[-1]]) > EPS:
             kept.append(joint)
-    if len(kept) < 2 or unit(rest[kept[-1]] - rest[kept[0]]) @ UP < MAX_REST_TILT:
-        return None
-    return kept
+    return kept if len(kept) >= 2 else None
+
+
+def vertical_of(skeleton: Skeleton, chain: list[int] | None) -> tuple[FloatArray, bool]:
+    """The file's vertical and whether its rest pose stands along it. Z-up exporters (Blender,
+    MakeHuman, FAIR) stand their rest figure along +z; every other file is y-up, whatever its rest
+    pose does: Bandai-Namco's and Rokoko's lay every bone along its local +x."""
+    if chain is None:
+        return UP, True
+    rest = rest_positions(skeleton)
+    trunk = unit(rest[chain[-1]] - rest[chain[0]])
+    up = Z_UP if trunk @ Z_UP > MAX_REST_TILT else UP
+    return up, bool(trunk @ up > MAX_REST_TILT)
 
 
 def _lateral_pair(joints: dict[str, int], part: str) -> tuple[int, int] | None:
@@ -185,7 +203,7 @@ def _frames(skeleton: Skeleton, joints: dict[str, int]) -> tuple[Frame | None, F
     if chain is None or hips is None:
         return None, None
     bones = list(itertools.pairwise(chain))
-    pelvis = Frame(chain[0], bones[0], hips, chain[0])
+    pelvis = Frame(chain[0], bones[0], hips, _common_ancestor(skeleton, hips) or chain[0])
     upper = bones[1:] or bones
     rest = rest_positions(skeleton)
     thorax_bone = max(upper, key=lambda b: float(np.linalg.norm(rest[b[1]] - rest[b[0]])))
@@ -208,7 +226,8 @@ def find_body(skeleton: Skeleton) -> Body:
         for limb, (a, b) in LIMBS.items():
             if f"{a}_{side}" in joints and f"{b}_{side}" in joints:
                 limbs[f"{limb}_{side}"] = (joints[f"{a}_{side}"], joints[f"{b}_{side}"])
-    return Body(joints, pelvis, thorax, limbs)
+    up, upright = vertical_of(skeleton, _trunk_chain(skeleton, joints))
+    return Body(joints, pelvis, thorax, limbs, up, upright)
 
 
 def unit(v: FloatArray) -> FloatArray:
@@ -227,9 +246,10 @@ def make_frame(long_axis: FloatArray, lateral: FloatArray) -> FloatArray:
 
 
 def rest_positions(skeleton: Skeleton) -> FloatArray:
-    """World positions of the joints in the file's rest pose (every channel 0): (J, 3)."""
-    still = Motion(skeleton, np.zeros((1, skeleton.n_channels)), 1.0)
-    return positions(still)[0]
+    """World positions of the joints in the file's rest pose (every rotation 0, every joint at
+    its OFFSET): (J, 3). Not the frame of all-zero channels: where non-root joints have position
+    channels (Bandai-Namco) that frame would put every joint at its parent."""
+    return rest_points(skeleton)[: len(skeleton.names)]
 
 
 @dataclass(frozen=True)
@@ -240,6 +260,8 @@ class Geometry:
     thorax: FloatArray | None
     axes: dict[str, FloatArray]
     rest_axes: dict[str, FloatArray]  # the same limb axes in the rest pose: (3,)
+    up: FloatArray = field(default_factory=lambda: UP)  # the file's vertical: (3,)
+    upright: bool = True  # whether the rest pose stands (it then gives the ankle's zero)
 
 
 def geometry(motion: Motion, method: str = "orientation") -> Geometry:
@@ -250,6 +272,11 @@ def geometry(motion: Motion, method: str = "orientation") -> Geometry:
     body = find_body(skeleton)
     rest = rest_positions(skeleton)
     rest_axes = {k: unit(rest[b] - rest[a]) for k, (a, b) in body.limbs.items()}
+    if not body.upright:  # the rest pose is no posture: trunk frames from the body's own lines
+        pos = positions(motion)
+        axes = {k: unit(pos[:, b] - pos[:, a]) for k, (a, b) in body.limbs.items()}
+        pelvis, thorax = trunk_from_points(pos, body)
+        return Geometry(pelvis, thorax, axes, rest_axes, take_vertical(pos, body), False)
     neutral = neutral_frame(rest, body)
     if method == "positions":
         pos = positions(motion)
@@ -265,7 +292,37 @@ def geometry(motion: Motion, method: str = "orientation") -> Geometry:
             for f in body_frames(body)
         ]
         axes = {k: unit(_chain_vector(skeleton, rot, a, b)) for k, (a, b) in body.limbs.items()}
-    return Geometry(frames[0], frames[1], axes, rest_axes)
+    return Geometry(frames[0], frames[1], axes, rest_axes, body.up, True)
+
+
+def trunk_from_points(pos: FloatArray, body: Body) -> tuple[FloatArray | None, ...]:
+    """Trunk frames of a rig whose rest pose is not a standing figure (Bandai-Namco, Rokoko lay
+    every bone along its local +x, so turning the rest axes gives no anatomical frame): each
+    segment's long axis is its bone (pelvis joint → first spine joint, the thorax bone), its
+    lateral axis the hip or collar line. Where the bone's upper joint hangs directly from the
+    frame's joint (Bandai-Namco's ``Hips`` → ``Spine``, ``Chest`` → ``Neck``), this is the frame
+    the joint's rotation turns."""
+    if body.pelvis is None:
+        return None, None
+    frames = [
+        None
+        if f is None
+        else make_frame(
+            pos[:, f.bone[1]] - pos[:, f.bone[0]], pos[:, f.lateral[1]] - pos[:, f.lateral[0]]
+        )
+        for f in body_frames(body)
+    ]
+    return frames[0], frames[1]
+
+
+def take_vertical(pos: FloatArray, body: Body) -> FloatArray:
+    """The vertical of a file whose rest pose says nothing about it: +y or +z, whichever the
+    pelvis → thorax line follows more over the take (people mostly stand or sit upright)."""
+    if body.pelvis is None:
+        return body.up
+    top = body.thorax.bone[1] if body.thorax is not None else body.pelvis.bone[1]
+    trunk = np.nanmean(unit(pos[:, top] - pos[:, body.pelvis.bone[0]]), axis=0)
+    return Z_UP if trunk @ Z_UP > trunk @ UP else UP
 
 
 def body_frames(body: Body) -> tuple[Frame | None, Frame | None]:
@@ -292,7 +349,7 @@ def neutral_frame(rest: FloatArray, body: Body) -> FloatArray | None:
     if body.pelvis is None:
         return None
     left, right = body.pelvis.lateral
-    return make_frame(UP, rest[right] - rest[left])
+    return make_frame(body.up, rest[right] - rest[left])
 
 
 def _frame_from_points(

@@ -2,8 +2,10 @@
 
 ``angle_label("knee_flexion_left")`` is "Left knee flexion"; `angle_groups` puts the angles of a
 result into regions (trunk, hips, knees, ankles, shoulders, elbows) beside their normal adult
-range, the regions the exercise moves first. `involves_arms` decides from an exercise's involved
-joint names whether it is an exercise of the upper limb (the reachable workspace is measured then).
+range, flagging values outside it, with the angles the recording could not measure and why, the
+regions the exercise moves first; `symmetry_rows` sets each left range beside the right one.
+`involves_arms` decides from an exercise's involved joint names whether it is an exercise of the
+upper limb (the reachable workspace is measured then).
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ REGIONS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("Hips", ("hip_flexion", "hip_abduction")),
     ("Knees", ("knee_flexion",)),
     ("Ankles", ("ankle_dorsiflexion",)),
-    ("Shoulders", ("shoulder_flexion", "shoulder_abduction")),
+    ("Shoulders", ("shoulder_elevation", "shoulder_flexion", "shoulder_abduction")),
     ("Elbows", ("elbow_flexion",)),
 )
 MOTIONS = {
@@ -33,6 +35,7 @@ MOTIONS = {
     "ankle_dorsiflexion": "ankle dorsiflexion",
     "shoulder_flexion": "shoulder flexion",
     "shoulder_abduction": "shoulder abduction",
+    "shoulder_elevation": "shoulder elevation (arm to trunk)",
     "elbow_flexion": "elbow flexion",
 }
 # body role of a joint (analysis.clinical.body) -> the region whose angles it moves
@@ -112,6 +115,17 @@ def involves_arms(joints: Iterable[str]) -> bool:
     return arms > 0 and arms > sum(map(_is_leg, joints))
 
 
+def beyond_normal(name: str, angle: RangeLike) -> str:
+    """Plain words for a recorded range outside the normal adult one ("" inside it)."""
+    norm = norm_for(name)
+    words = [
+        f"{angle.max - norm.maximum:.0f}° above" if angle.max > norm.maximum + 0.5 else "",
+        f"{norm.minimum - angle.min:.0f}° below" if angle.min < norm.minimum - 0.5 else "",
+    ]
+    said = " and ".join(w for w in words if w)
+    return f"{said} the normal range" if said else ""
+
+
 def angle_row(name: str, angle: RangeLike) -> dict[str, Any]:
     norm = norm_for(name)
     return {
@@ -124,26 +138,52 @@ def angle_row(name: str, angle: RangeLike) -> dict[str, Any]:
         "norm_max": norm.maximum,
         "norm_range": norm.range,
         "percent_of_norm": round(100.0 * angle.range / norm.range) if norm.range else None,
+        "flag": beyond_normal(name, angle),
     }
 
 
+def note_row(name: str, note: str) -> dict[str, Any]:
+    """An angle the recording does not measure: its label and the reason, no figures."""
+    return {"name": name, "label": angle_label(name), "note": note}
+
+
 def angle_groups(
-    angles: Mapping[str, RangeLike], involved_joints: Iterable[str] = ()
+    angles: Mapping[str, RangeLike],
+    involved_joints: Iterable[str] = (),
+    notes: Mapping[str, str] | None = None,
 ) -> list[dict[str, Any]]:
-    """The angles of a result by region: ``[{"region", "involved", "rows": [angle_row…]}]``,
-    regions the exercise moves first, then the others, each in `REGIONS` order."""
-    moved = involved_regions(involved_joints)
+    """The angles of a result by region: ``[{"region", "involved", "rows": [angle_row…],
+    "notes": [note_row…]}]``, regions the exercise moves first, then the others, each in
+    `REGIONS` order; ``notes``: the result's ``clinical_notes`` (angles not measured, why)."""
+    moved, notes = involved_regions(involved_joints), notes or {}
     groups = []
     for title, bases in REGIONS:
-        rows = [
-            angle_row(name, angles[name])
-            for base in bases
-            for name in (base, f"{base}_left", f"{base}_right")
-            if name in angles
-        ]
-        if rows:
-            groups.append({"region": title, "involved": title in moved, "rows": rows})
+        names = [n for base in bases for n in (base, f"{base}_left", f"{base}_right")]
+        rows = [angle_row(name, angles[name]) for name in names if name in angles]
+        unmeasured = [note_row(n, notes[n]) for n in names if n in notes and n not in angles]
+        if rows or unmeasured:
+            groups.append(
+                {"region": title, "involved": title in moved, "rows": rows, "notes": unmeasured}
+            )
     return sorted(groups, key=lambda g: not g["involved"])
+
+
+def symmetry_rows(angles: Mapping[str, RangeLike]) -> list[dict[str, Any]]:
+    """Each angle measured on both sides: ``{"label", "left", "right", "difference"}``, the
+    ranges in degrees and left minus right (the larger side's excess), in `REGIONS` order."""
+    rows = []
+    for _, bases in REGIONS:
+        for base in bases:
+            left, right = angles.get(f"{base}_left"), angles.get(f"{base}_right")
+            if left is not None and right is not None:
+                label = MOTIONS.get(base, base)
+                rows.append({
+                    "label": label[:1].upper() + label[1:],
+                    "left": left.range,
+                    "right": right.range,
+                    "difference": round(left.range - right.range, 2),
+                })  # fmt: skip
+    return rows
 
 
 # Corrections (analysis.feedback.advice): the body part each clinical angle moves, in plain
@@ -153,11 +193,13 @@ def angle_groups(
 ANGLE_PARTS = {
     "knee_flexion": "knee", "hip_flexion": "hip", "hip_abduction": "leg",
     "ankle_dorsiflexion": "ankle", "shoulder_flexion": "arm", "shoulder_abduction": "arm",
+    "shoulder_elevation": "arm",
     "elbow_flexion": "elbow", "trunk_flexion": "trunk", "trunk_lateral_flexion": "trunk",
 }  # fmt: skip
 ANGLE_PAST = {
     "knee_flexion": "bent", "hip_flexion": "bent", "hip_abduction": "moved out",
     "ankle_dorsiflexion": "bent", "shoulder_flexion": "rose", "shoulder_abduction": "rose",
+    "shoulder_elevation": "rose",
     "elbow_flexion": "bent", "trunk_flexion": "leaned", "trunk_lateral_flexion": "bent sideways",
 }  # fmt: skip
 INSTRUCTIONS: dict[tuple[str, str], tuple[str, str]] = {
@@ -173,6 +215,8 @@ INSTRUCTIONS: dict[tuple[str, str], tuple[str, str]] = {
     ("shoulder_flexion", "more"): ("lower", "Lower your {part}: not as high in front of you"),
     ("shoulder_abduction", "less"): ("raise", "Raise your {part} higher out to the side"),
     ("shoulder_abduction", "more"): ("lower", "Lower your {part}: not as high out to the side"),
+    ("shoulder_elevation", "less"): ("raise", "Raise your {part} higher"),
+    ("shoulder_elevation", "more"): ("lower", "Lower your {part}: not as high"),
     ("elbow_flexion", "less"): ("bend", "Bend your {part} more"),
     ("elbow_flexion", "more"): ("straighten", "Straighten your {part} more"),
     ("trunk_flexion", "less"): ("lean", "Lean your {part} further forward"),

@@ -42,6 +42,7 @@ NORMS: dict[str, Norm] = {
         Norm("ankle_dorsiflexion", -50.0, 20.0),
         Norm("shoulder_flexion", -60.0, 180.0),
         Norm("shoulder_abduction", 0.0, 180.0),
+        Norm("shoulder_elevation", 0.0, 180.0),  # flexion's and abduction's common maximum
         Norm("elbow_flexion", 0.0, 150.0),
         Norm("trunk_flexion", -25.0, 80.0),
         Norm("trunk_lateral_flexion", -35.0, 35.0),
@@ -58,3 +59,40 @@ def norm_for(name: str) -> Norm:
         if name.endswith(suffix):
             name = name[: -len(suffix)]
     return NORMS[name]
+
+
+# Physiological limits: values no adult body reaches, so a reading beyond them is the capture's
+# error, not a measurement (analysis.clinical.angles.within_limits). The normal maxima above,
+# widened to what healthy and hypermobile adults reach: knees and elbows hyperextend up to
+# about 10–15° (the Beighton score counts more than 10° as hypermobility: Beighton, Solomon &
+# Soskolne, Ann Rheum Dis 1973); deep squatting and kneeling reach about 155–165° knee flexion,
+# 35–40° ankle dorsiflexion and 120–140° hip flexion (Hemmerich et al., "Hip, knee, and ankle
+# kinematics of high range of motion activities of daily living", J Orthop Res 2006); passive
+# hip flexion with the knee bent exceeds 140° (Kapandji, The Physiology of the Joints, vol. 2),
+# and where a rig turns the pelvis with the lower back (Kinect) the reading adds some flexion of
+# the lumbar spine, so 150°; the arm
+# ends overhead at 180° of elevation, a little further with the spine extended; the side
+# splits of trained dancers reach 90° hip abduction.
+# The trunk is measured against the vertical, so bending down to the floor adds the hips' flexion
+# to the spine's (80° thoracolumbar, AAOS): up to about 135°.
+LIMITS_SOURCE = (
+    "normal maxima (AAOS) widened to healthy and hypermobile adults' extremes: Beighton et al. "
+    "1973, Hemmerich et al. 2006, Kapandji"
+)
+LIMITS: dict[str, tuple[float, float]] = {
+    "knee_flexion": (-15.0, 165.0),
+    "hip_flexion": (-40.0, 150.0),
+    "hip_abduction": (-45.0, 90.0),
+    "ankle_dorsiflexion": (-60.0, 45.0),
+    "shoulder_flexion": (-70.0, 185.0),
+    "shoulder_abduction": (-10.0, 185.0),
+    "shoulder_elevation": (0.0, 185.0),
+    "elbow_flexion": (-15.0, 160.0),
+    "trunk_flexion": (-45.0, 135.0),
+    "trunk_lateral_flexion": (-60.0, 60.0),
+}
+
+
+def limits_for(name: str) -> tuple[float, float]:
+    """The physiological limits (degrees) of an angle, with or without its side."""
+    return LIMITS[norm_for(name).angle]

@@ -22,6 +22,7 @@ from analysis.feedback.sentences import Grammar
 MAX_CORRECTIONS = 5
 MAX_WELL = 3
 TEMPO_DIRECTIONS = {"fast": "slow down", "slow": "speed up"}
+HELD_DIRECTIONS = {"held": "straighten", "held_back": "lean"}  # a trunk lean held all through
 
 
 @dataclass(frozen=True)
@@ -35,12 +36,13 @@ class Correction:
     unit: str  # "°" or "%"
     repetitions: tuple[int, ...]  # 1-based
     frame: int  # where the first of those repetitions starts
+    angle: str = ""  # the clinical angle it speaks of ("" for tempo), for evaluations
 
     def to_json(self) -> dict[str, Any]:
         return {
             "text": self.text, "part": self.part, "direction": self.direction,
             "amount": self.amount, "unit": self.unit, "repetitions": list(self.repetitions),
-            "frame": self.frame,
+            "frame": self.frame, "angle": self.angle,
         }  # fmt: skip
 
     @classmethod
@@ -49,7 +51,7 @@ class Correction:
             str(data.get("text", "")), str(data.get("part", "")),
             str(data.get("direction", "")), float(data.get("amount", 0.0)),
             str(data.get("unit", "")), tuple(int(r) for r in data.get("repetitions", ())),
-            int(data.get("frame", 0)),
+            int(data.get("frame", 0)), str(data.get("angle", "")),
         )  # fmt: skip
 
 
@@ -89,6 +91,8 @@ def direction_of(finding: Finding) -> str:
         return TEMPO_DIRECTIONS.get(finding.kind, "")
     if finding.kind == "extra":
         return STILL_INSTRUCTION[0]
+    if finding.kind in HELD_DIRECTIONS:
+        return HELD_DIRECTIONS[finding.kind] if finding.angle == "trunk_flexion" else "straighten"
     return INSTRUCTIONS.get((split_side(finding.angle)[0], finding.kind), ("", ""))[0]
 
 
@@ -146,6 +150,6 @@ def advise(
             unit = "°" if finding.angle else "%"
             corrections.append(Correction(
                 text, values["part"], direction_of(finding), finding.amount, unit,
-                finding.repetitions, finding.frame,
+                finding.repetitions, finding.frame, finding.angle,
             ))  # fmt: skip
     return Advice(tuple(corrections), tuple(well))

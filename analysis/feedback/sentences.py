@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
+from analysis.assessment.findings import KINDS
 from analysis.feedback.grammar import (
     And,
     Condition,
@@ -255,8 +256,6 @@ def _problem(
     n_levels: int,
 ) -> str:
     if isinstance(node, FindingIs):
-        from analysis.assessment.findings import KINDS
-
         known_kinds = ", ".join(KINDS)
         return "" if node.kind in KINDS else f"unknown finding {node.kind} ({known_kinds})"
     if isinstance(node, LandmarkType):

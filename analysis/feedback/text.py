@@ -24,6 +24,14 @@ import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
+from analysis.clinical.labels import (
+    ANGLE_PARTS,
+    ANGLE_PAST,
+    INSTRUCTIONS,
+    STILL_INSTRUCTION,
+    angle_part,
+    split_side,
+)
 from analysis.feedback.grammar import (
     And,
     Condition,
@@ -192,18 +200,41 @@ def _joint_rules(joint: str, number: int, moment: str, levels: Sequence[int]) ->
     return rules
 
 
+# a trunk lean held all through (analysis.assessment.findings: "held" is forward / to the right)
+HELD_INSTRUCTIONS = {
+    ("trunk_flexion", "held"): "Straighten your {part}, by about {amount}: it leaned that much "
+    "further forward than the demonstration's all through the movement",
+    ("trunk_flexion", "held_back"): "Lean your {part} further forward, by about {amount}: it "
+    "leaned that much further back than the demonstration's all through the movement",
+    ("trunk_lateral_flexion", "held"): "Straighten your {part}, by about {amount}: it leaned that "
+    "much further to the right than the demonstration's all through the movement",
+    ("trunk_lateral_flexion", "held_back"): "Straighten your {part}, by about {amount}: it leaned "
+    "that much further to the left than the demonstration's all through the movement",
+}
+
+# the compensations measured from positions (analysis.assessment.compensations)
+COMPENSATION_INSTRUCTIONS = {
+    ("trunk_rotation", "extra"): "Keep your trunk facing forward, by about {amount}: it turned "
+    "through {patient} where the demonstration's turns through {tutor}",
+    ("shoulder_hike", "extra"): "Keep your {part} down, by about {amount}: it rose through "
+    "{patient} where the demonstration's rises through {tutor}",
+    ("knee_valgus", "extra"): "Keep your {part} in line over your foot, by about {amount}: it "
+    "moved inward and outward through {patient} where the demonstration's moves through {tutor}",
+}
+COMPENSATION_NAMES = ("trunk_rotation", *(f"{base}_{side}" for base in ("shoulder_hike",
+                      "knee_valgus") for side in ("left", "right")))  # fmt: skip
+
+
 def _finding_rule(kind: str, angle: str) -> Rule:
     """The default sentence of one finding (`analysis.feedback.advice` fills the fields)."""
-    from analysis.clinical.labels import (
-        ANGLE_PAST,
-        INSTRUCTIONS,
-        STILL_INSTRUCTION,
-        angle_part,
-        split_side,
-    )
-
     base = split_side(angle)[0]
     part, past = angle_part(angle), ANGLE_PAST.get(base, "moved")
+    if (base, kind) in COMPENSATION_INSTRUCTIONS:
+        text = COMPENSATION_INSTRUCTIONS[base, kind].replace("{part}", part)
+        return Rule(FindingIs(kind, angle), feedback=text + ", in {repetitions}")
+    if kind in ("held", "held_back"):
+        text = HELD_INSTRUCTIONS.get((base, kind), "Straighten your {part}").replace("{part}", part)
+        return Rule(FindingIs(kind, angle), feedback=text + ", in {repetitions}")
     if kind == "extra":
         text = (f"{STILL_INSTRUCTION[1].format(part=part)}: it {past} {{patient}} where the "
                 "demonstration stays within {tutor}, in {repetitions}")  # fmt: skip
@@ -227,10 +258,7 @@ _TEMPO_RULES = (
 
 def correction_rules() -> list[Rule]:
     """The default ``%KIND$ANGLE`` rules: every clinical angle the body has, and the tempo."""
-    from analysis.clinical.labels import ANGLE_PARTS
-
-    # the names of analysis.clinical.ANGLE_NAMES, from the labels (that package's angles module
-    # reads the pipeline's results, which read this package)
+    # the names of analysis.clinical.ANGLE_NAMES, in the labels' order (the rules' order)
     ANGLE_NAMES = [
         name
         for base in ANGLE_PARTS
@@ -239,6 +267,9 @@ def correction_rules() -> list[Rule]:
     rules = [
         _finding_rule(kind, angle) for angle in ANGLE_NAMES for kind in ("less", "more", "extra")
     ]
+    rules += [_finding_rule(k, a) for a in ANGLE_NAMES if a.startswith("trunk")
+              for k in ("held", "held_back")]  # fmt: skip
+    rules += [_finding_rule("extra", name) for name in COMPENSATION_NAMES]
     rules += [_finding_rule("good", angle) for angle in ANGLE_NAMES]
     return rules + list(_TEMPO_RULES)
 

@@ -1,7 +1,8 @@
-"""Geometry of a motion: quaternions, forward kinematics, resampling and normalised pose features.
+"""Geometry of a motion: quaternions, forward kinematics, resampling, normalised pose features,
+and retargeting a recording of another rig onto an exercise's skeleton (`map_onto`).
 
-Pipeline: preparation resamples to the tutor's frame rate and computes the rotations and
-normalised positions every later stage reads.
+Pipeline: preparation puts the upload on the exercise's skeleton (`map_onto`), resamples it to
+the tutor's frame rate and computes the rotations and normalised positions every later stage reads.
 """
 
 from analysis.kinematics.forward_kinematics import (
@@ -19,11 +20,13 @@ from analysis.kinematics.posefeatures import (
     scaled_positions,
 )
 from analysis.kinematics.resample import resample
+from analysis.kinematics.retarget import map_onto
 
 __all__ = [
     "flatten",
     "forward",
     "joint_angles",
+    "map_onto",
     "normalised_positions",
     "positions",
     "range_of_motion",

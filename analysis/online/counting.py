@@ -15,10 +15,11 @@ repetition cut off by the end still counts, as offline.
 Offline, the key poses also vote: a peak none of them confirms counts only if it rises to 60 %
 of the confirmed ones, and a key pose's end of range in a gap wide enough for two repetitions
 adds one there. Live there are no key poses (their features need frames on both sides): every
-peak that passes the tests above and rises `MIN_PROMINENCE` above rest counts, and in a gap of
-`GAP_FACTOR` times the median spacing of the repetitions so far (once three are counted) the
-clearest hump counts too. On the development UI-PRMD sessions the live count equals the
-offline one on 116 of 120 (`bench/eval_live.py`, docs/EVALUATION.md).
+peak that passes the tests above and rises `MIN_PROMINENCE` above rest counts, unless it stays
+below `LOW_HEIGHT` of the counted peaks' median height (once three are counted) or is a low
+first peak the stream began after (`UNSEEN_RISE`); in a gap of `GAP_FACTOR` times the median
+spacing of the repetitions so far (once three are counted) the clearest hump counts too
+(`bench/eval_live.py`, docs/sections/eval_live.md).
 """
 
 from __future__ import annotations
@@ -43,6 +44,8 @@ from analysis.landmarks.segmentation import RELATIVE_PROMINENCE as RELATIVE
 
 FloatArray = npt.NDArray[np.float64]
 HISTORY_REPS = 3.0  # repetitions of cleaned signal searched for peaks (older ones are counted)
+LOW_HEIGHT = 0.3  # of the counted peaks' median height: lower peaks are twitches (live rule)
+UNSEEN_RISE = 0.5  # tutor units: a first peak whose rise the stream missed counts from here
 
 
 @dataclass(frozen=True)
@@ -198,8 +201,22 @@ class RepetitionCounter:
                 continue  # a repetition rises above the rest level, and stands out
             if self.counted and frame - after < self._distance:
                 continue  # counted already, or a higher one offline keeps (distance rule)
+            if self._too_low(frame, h):
+                continue
             return self._gap_peak(after, frame, rest) or (frame, h)
         return None
+
+    def _too_low(self, frame: int, h: float) -> bool:
+        """Offline, a peak no key pose confirms counts only if it rises to `UNCONFIRMED_HEIGHT`
+        of the confirmed ones; live, a peak below `LOW_HEIGHT` of the counted ones' median
+        (once three are counted), or a first peak at the stream's start (its rise unseen: the
+        stream began on the way down) below `UNSEEN_RISE`, is a twitch."""
+        if len(self.counted) >= 3:
+            return h < LOW_HEIGHT * float(np.median([c.height for c in self.counted]))
+        if self.counted or h >= UNSEEN_RISE:
+            return False
+        before = self.clean.values[: max(frame, 1)]  # its rise: a prominence below the peak
+        return bool(before.min() > self.clean.values[frame] - MIN_PROMINENCE)
 
     def _gap_peak(self, after: int, frame: int, rest: float) -> tuple[int, float] | None:
         """Offline, a key pose's end of range in a gap between peaks wide enough for two
@@ -210,7 +227,8 @@ class RepetitionCounter:
         spacing = float(np.median(np.diff([c.peak for c in self.counted])))
         if frame - after <= GAP_FACTOR * spacing:
             return None
-        lo, hi = after + int(np.ceil(0.5 * spacing)), frame - int(np.ceil(0.5 * spacing))
+        # up to a quarter spacing before the next peak: the trough after the hump is inside
+        lo, hi = after + int(np.ceil(0.5 * spacing)), frame - int(np.ceil(0.25 * spacing))
         if hi <= lo:
             return None
         window = self.clean.values[lo : hi + 1] - rest

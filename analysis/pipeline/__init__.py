@@ -3,6 +3,7 @@
 `analyse` is the only place the stage order lives; workers and the command line call it.
 """
 
+from analysis.pipeline.match import Candidate, MatchContext  # whether a recording fits (match.py)
 from analysis.pipeline.model import (
     FittedModel,
     ModelVersionError,
@@ -10,20 +11,30 @@ from analysis.pipeline.model import (
     dump_model,
     load_model,
 )
-from analysis.pipeline.model_fit import ModelComponents, TrainingRecording
-from analysis.pipeline.results import AnalysisSummary, AngleRange, KeyPose, RepetitionResult
+from analysis.pipeline.model_fit import ModelComponents, TrainingRecording, TutorKeyPosesError
+from analysis.pipeline.results import (
+    AnalysisSummary,
+    AngleRange,
+    ExerciseMatch,
+    KeyPose,
+    RepetitionResult,
+)
 from analysis.pipeline.run import AnalysisResult, analyse
 
 __all__ = [
     "AnalysisResult",
     "AnalysisSummary",
     "AngleRange",
+    "Candidate",
+    "ExerciseMatch",
     "FittedModel",
     "KeyPose",
+    "MatchContext",
     "ModelComponents",
     "ModelVersionError",
     "RepetitionResult",
     "TrainingRecording",
+    "TutorKeyPosesError",
     "analyse",
     "build_model",
     "dump_model",

@@ -5,15 +5,23 @@ joints' local rotations, path-length weighting (eq 3) and the exercise's CMA-ES 
 
 Along that warping path (tutor frames i, patient frames j), paper 001's Table 1:
 
-- *too fast*: many-to-one runs where several tutor frames meet one patient frame; *too slow*: one
-  tutor frame held over several patient frames. Reported when the repetition as a whole is that
-  much quicker or slower than the tutor's (its duration ratio past ``fast_below`` /
-  ``slow_above``), with the patient frames those runs cover.
-- *incomplete* / *overdone*: the end of the movement the patient reached, on the exercise's
-  progress axis (1 = the tutor's end of range), below ``incomplete_below`` or above
-  ``overdone_above``. Incomplete frames: where the path holds one patient frame while the tutor
-  goes through its end of range (a non-monotonic many-to-one run); overdone frames: where the
-  patient is farther along than the tutor ever goes.
+- *too fast* / *too slow* (`Pace.tempo`): the repetition's duration over the reference's (the
+  median of the tutor's repetitions), judged twice: against the reference (`GuidanceRules`
+  ``reference``: far from the tutor's pace whoever the patient is; wider once an earlier
+  session is known) and against the patient's own pace (``own``: ratios to the patient's usual
+  tempo: the median of an earlier session's repetitions when known, else of this session's
+  repetitions so far). The
+  frames: the many-to-one runs of the warping path (several tutor frames on one patient frame:
+  fast; one tutor frame held over several patient frames: slow).
+- *incomplete* / *overdone* (`Pace.reach`): the angular excursion of the involved joints (each
+  joint's largest rotation away from the repetition's first pose, weighted by how far the tutor
+  moves it) over the reference's (per joint, the median over the tutor's repetitions), judged
+  against the reference and the patient's own reach in the same way. Incomplete frames: where
+  the path holds one patient frame while the tutor goes on; overdone frames: where the patient's
+  excursion passes the tutor's largest.
+
+`pace_guidance` is the one rule: the offline pipeline (`analysis.pipeline.repetition_stage`) and
+the live aligner (`analysis.live.aligner`) both call `repetition_guidance`.
 
 GB-DTW's score (001 eq 8): 100 exp(−mean path cost / scale), the scale set so that the tutor's
 own repetitions score about 90. Paper 003's figures, reported separately: alignment quality as the
@@ -24,6 +32,7 @@ angular distance of the involved joints' rotations, in degrees.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,13 +51,36 @@ TAU_PAIRS = 96
 
 @dataclass(frozen=True)
 class GuidanceRules:
-    """When a repetition gets each kind of guidance (ratios to the tutor's repetition)."""
+    """When a repetition gets each kind of guidance. Bands (too fast below, too slow above,
+    incomplete below, overdone above) on the ratios to the reference's tempo and reach:
+    ``reference`` in a first session, the wider ``known_reference`` once an earlier session's
+    pace is known (that pace then says what is usual for this patient); ``own``: on the ratios
+    to the patient's usual pace (`Pace`)."""
 
-    fast_below: float = 0.7
-    slow_above: float = 1.5
-    incomplete_below: float = 0.7
-    overdone_above: float = 1.3
+    reference: tuple[float, float, float, float] = (0.65, 1.8, 0.55, 1.6)
+    known_reference: tuple[float, float, float, float] = (0.4, 3.0, 0.3, 3.0)
+    own: tuple[float, float, float, float] = (0.75, 1.3, 0.7, 1.12)
     min_run: int = 2
+
+
+@dataclass(frozen=True)
+class Pace:
+    """A repetition, or a patient's usual repetition, against the reference: tempo (duration
+    ratio, > 1 slower) and reach (angular excursion ratio of the involved joints, > 1 farther);
+    earlier: a usual pace from an earlier session (not this one's repetitions so far)."""
+
+    tempo: float
+    reach: float
+    earlier: bool = False
+
+
+def usual_pace(paces: Sequence[Pace]) -> Pace | None:
+    """The median tempo and reach of some repetitions (None for none)."""
+    if not paces:
+        return None
+    return Pace(
+        float(np.median([p.tempo for p in paces])), float(np.median([p.reach for p in paces]))
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,34 +164,78 @@ def _span(runs: list[tuple[int, int]], n: int) -> tuple[int, int]:
     return min(a for a, _ in runs), max(b for _, b in runs)
 
 
+def excursion(q: FloatArray) -> FloatArray:
+    """(n, J) each joint's rotation away from the first frame (degrees) of (n, J, 4) rotations."""
+    q = quat.make_continuous(q, axis=0)
+    return np.asarray(quat.angle_between(q[:1], q, degrees=True), dtype=np.float64)
+
+
+def reference_excursion(
+    tutor_q: FloatArray, tutor_mirror_q: FloatArray, reps: Sequence[tuple[int, int]], step: int
+) -> FloatArray:
+    """(J,) per involved joint and its mirror image's joint together, the median over the
+    tutor's repetitions of their largest excursion: (F, J, 4) rotations of both."""
+    spans = list(reps) or [(0, len(tutor_q) - 1)]
+    pairs = [
+        (excursion(tutor_q[a : b + 1 : step]) + excursion(tutor_mirror_q[a : b + 1 : step]))
+        for a, b in spans
+    ]
+    return np.asarray(np.median([p.max(axis=0) for p in pairs], axis=0), dtype=np.float64)
+
+
+def reach_series(q: FloatArray, mirror_q: FloatArray, reference: FloatArray) -> FloatArray:
+    """(n,) the involved joints' excursion with their mirror images' (so either side, and
+    alternating sides, count alike), weighted by the reference's, over the reference's (1 = as
+    far as the tutor)."""
+    w = reference / max(float(reference.sum()), 1e-9)
+    moved = excursion(q) + excursion(mirror_q)
+    return np.asarray(moved @ w / max(float(w @ reference), 1e-9), dtype=np.float64)
+
+
+def pace_guidance(pace: Pace, own: Pace | None, rules: GuidanceRules) -> list[tuple[str, float]]:
+    """The one tempo and reach rule (offline and live): the types that apply, each with how far
+    past its threshold the repetition is (> 1), most pressing first; ``own``: the patient's usual
+    pace (None: judged against the reference alone)."""
+    mine = own or Pace(1.0, 1.0)
+    fast, slow, short, far = rules.known_reference if mine.earlier else rules.reference
+    own_fast, own_slow, own_short, own_far = rules.own
+    tempo, reach = max(pace.tempo, 1e-9), max(pace.reach, 1e-3)
+    my_tempo, my_reach = tempo / max(mine.tempo, 1e-9), reach / max(mine.reach, 1e-9)
+    past = {
+        "too fast": max(fast / tempo, own_fast / my_tempo),
+        "too slow": max(tempo / slow, my_tempo / own_slow),
+        "incomplete": max(short / reach, own_short / my_reach),
+        "overdone": max(reach / far, my_reach / own_far),
+    }
+    return sorted(((k, v) for k, v in past.items() if v > 1.0), key=lambda item: -item[1])
+
+
+def repetition_pace(
+    q: FloatArray, mirror_q: FloatArray, reference: FloatArray, tempo: float
+) -> tuple[Pace, FloatArray]:
+    """A repetition's `Pace` and `reach_series` from its (n, J, 4) rotations of the involved
+    joints (and their mirror image's); tempo: its duration over the reference's."""
+    series = reach_series(q, mirror_q, reference)
+    return Pace(float(tempo), float(series.max()) if series.size else 0.0), series
+
+
 def guidance(
     alignment: GestureAlignment,
-    patient_progress: FloatArray,
-    tutor_reach: float,
+    reach: FloatArray,
+    pace: Pace,
+    own: Pace | None,
     rules: GuidanceRules,
 ) -> tuple[Guidance, ...]:
     """Table 1 guidance for one repetition, most pressing first; frames relative to its start.
 
-    patient_progress: (n,) the repetition's progress signal relative to its first frame (tutor
-    units); tutor_reach: how far along the axis the matched tutor repetition goes."""
-    path, n = alignment.path, len(patient_progress)
-    m = int(path[:, 0].max()) + 1
+    reach: (n,) the repetition's `reach_series`; pace: the repetition's; own: the patient's usual
+    pace (see `pace_guidance`)."""
+    path, n = alignment.path, len(reach)
     fast, slow = _runs(path, rules.min_run)
-    tempo = n / max(m, 1)
-    reach = float(patient_progress.max()) / max(tutor_reach, 1e-9)
-    found: list[tuple[float, Guidance]] = []
-    if tempo < rules.fast_below:
-        found.append((rules.fast_below / tempo, Guidance("too fast", _span(fast, n))))
-    if tempo > rules.slow_above:
-        found.append((tempo / rules.slow_above, Guidance("too slow", _span(slow, n))))
-    if reach < rules.incomplete_below:
-        held = Guidance("incomplete", _held(path, n))
-        found.append((rules.incomplete_below / max(reach, 1e-3), held))
-    if reach > rules.overdone_above:
-        beyond = np.flatnonzero(patient_progress > tutor_reach)
-        frames = (int(beyond[0]), int(beyond[-1])) if beyond.size else (0, n - 1)
-        found.append((reach / rules.overdone_above, Guidance("overdone", frames)))
-    return tuple(g for _, g in sorted(found, key=lambda item: -item[0]))
+    frames = {"too fast": _span(fast, n), "too slow": _span(slow, n), "incomplete": _held(path, n)}
+    beyond = np.flatnonzero(reach > 1.0)
+    frames["overdone"] = (int(beyond[0]), int(beyond[-1])) if beyond.size else (0, n - 1)
+    return tuple(Guidance(kind, frames[kind]) for kind, _ in pace_guidance(pace, own, rules))
 
 
 def _held(path: IntArray, n: int) -> tuple[int, int]:

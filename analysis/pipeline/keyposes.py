@@ -110,6 +110,8 @@ def key_pose_repetitions(
     height = rest_height(progress, rep_frames)
     key_peaks = np.array([_main_peak(r, height) for r in reps], dtype=np.int64)
     peaks = fuse_peaks(height, np.clip(key_peaks, 1, max(n - 2, 1)), rep_frames)
+    if peaks.size == 0:  # key-pose cycles but no movement along the exercise's axis to cut
+        return _fallback(progress, rep_frames)
     segments = segments_at(height, peaks, rep_frames)
     shown = _shown(kept, origin, segments, model.cycle_[0])
     return KeyPoseRepetitions(segments, shown, "landmarks")

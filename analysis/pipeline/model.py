@@ -22,7 +22,12 @@ import numpy.typing as npt
 from analysis import __version__ as code_version
 from analysis.bvh import Motion
 from analysis.feedback import Grammar, default_grammar
-from analysis.pipeline.model_fit import ModelComponents, TrainingRecording, fit_components
+from analysis.pipeline.model_fit import (
+    ModelComponents,
+    TrainingRecording,
+    TutorKeyPosesError,
+    fit_components,
+)
 
 FORMAT_VERSION = (
     4  # 3: one calibrated score scale (pass at 70), corrections; 4: tutor-distance scale
@@ -62,13 +67,18 @@ class FittedModel:
 
 def _check_landmarks(tutor: Motion, frames: Sequence[int], types: Sequence[int]) -> None:
     if len(frames) != len(types) or len(frames) < 2:
-        raise ValueError("give as many landmark types as frames, and at least two landmarks")
+        raise TutorKeyPosesError(
+            f"its reference has {len(frames)} key poses with {len(types)} types; it needs as "
+            "many types as key poses, and at least two"
+        )
     if any(f < 0 or f >= tutor.n_frames for f in frames):
-        raise ValueError(f"landmark frames must lie within the tutor's {tutor.n_frames} frames")
+        raise TutorKeyPosesError(
+            f"its key poses must lie within the reference's {tutor.n_frames} frames"
+        )
     if list(frames) != sorted(frames):
-        raise ValueError("landmark frames must be in time order")
+        raise TutorKeyPosesError("its key poses must be in time order")
     if 1 not in types:
-        raise ValueError("type 1 marks where each repetition starts; the tutor needs it")
+        raise TutorKeyPosesError("none of its key poses marks where a repetition starts")
 
 
 def build_model(

@@ -24,7 +24,7 @@ from analysis.assessment import (
     repetition_features,
     tutor_mean_poses,
 )
-from analysis.bvh import Motion
+from analysis.bvh import AnalysisInputError, Motion
 from analysis.kinematics import flatten, relative_to_start, resample, rotations, scaled_positions
 from analysis.landmarks import ProgressAxis, fit_axis
 from analysis.pipeline.model_parts import PaperParts, fit_paper_parts
@@ -33,6 +33,19 @@ from analysis.pipeline.prepare import mirrored, prepare, progress_signal
 FloatArray = npt.NDArray[np.float64]
 SCORING_FPS = 30.0
 Progress = Callable[[str, float], None]
+
+
+class TutorKeyPosesError(AnalysisInputError):
+    """The exercise's reference recording lacks the key poses a model needs (none marked yet,
+    or marked so that no whole repetition is known): no recording of it can be analysed until
+    they are marked, so trying again before that cannot help."""
+
+    def __init__(self, problem: str) -> None:
+        super().__init__(
+            f"The exercise cannot analyse recordings yet: {problem}. Mark the key poses on the "
+            "reference recording of the exercise (at least two where a repetition starts, around "
+            "one whole repetition); trying again before that cannot help."
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,7 +147,7 @@ def fit_components(  # noqa: PLR0917 (mirrors build_model's arguments)
     report("features", 0.2)
     reps = tutor_repetitions(frames, types)
     if not reps:
-        raise ValueError("the tutor needs at least two type-1 landmarks (one whole repetition)")
+        raise TutorKeyPosesError("only one of its key poses marks where a repetition starts")
     starts = np.array([a for a, _ in reps], dtype=np.int64)
     axis = fit_axis(flatten(all_points), starts, _end_of_range(frames, types))
     involved_idx = [names.index(n) for n in involved]

@@ -8,8 +8,16 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from analysis.bvh import Motion, RecordingTooShortError, Skeleton, map_joints, map_onto
-from analysis.kinematics import flatten, joint_angles, resample, rotations, scaled_positions
+from analysis.bvh import Motion, RecordingTooShortError, Skeleton, map_joints
+from analysis.bvh.plausibility import DEFAULT_LIMITS, Limits, check_recording, distinct_durations
+from analysis.kinematics import (
+    flatten,
+    joint_angles,
+    map_onto,
+    resample,
+    rotations,
+    scaled_positions,
+)
 from analysis.landmarks import ProgressAxis
 
 FloatArray = npt.NDArray[np.float64]
@@ -40,20 +48,28 @@ def check_length(motion: Motion, rep_frames: float, model_fps: float) -> None:
     seconds = motion.duration
     needed = 0.5 * rep_frames / model_fps
     if motion.n_frames < 4 or seconds < needed:
+        lasts, least = distinct_durations(seconds, needed)
         raise RecordingTooShortError(
-            f"The recording lasts {seconds:.1f} s ({motion.n_frames} frames); at least "
-            f"{needed:.1f} s are needed to hold one repetition."
+            f"The recording lasts {lasts} ({motion.n_frames} frames); at least "
+            f"{least} are needed to hold one repetition."
         )
 
 
 def prepare(
-    motion: Motion, model_names: tuple[str, ...] | Skeleton, fps: float, rep_frames: float
+    motion: Motion,
+    model_names: tuple[str, ...] | Skeleton,
+    fps: float,
+    rep_frames: float,
+    limits: Limits = DEFAULT_LIMITS,
 ) -> Prepared:
     """Map joints (SkeletonMismatchError if impossible), resample, compute features.
 
     Given the model's skeleton (``model.tutor.skeleton``) rather than its joint names, a recording
-    of any rig is first put on that skeleton with `analysis.bvh.map_onto`.
+    of any rig is first put on that skeleton with `analysis.kinematics.map_onto`.
     """
+    names = model_names.names if isinstance(model_names, Skeleton) else model_names
+    # Before anything is mapped or resampled: a damaged header must not allocate millions of frames.
+    check_recording(motion, fps, len(names), limits)
     if isinstance(model_names, Skeleton):
         motion = map_onto(motion, model_names)
         model_names = model_names.names

@@ -4,15 +4,26 @@ synchronised tutor repetition (`analysis.pipeline.gestures`)."""
 from __future__ import annotations
 
 import bisect
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
 
 from analysis.adjustment.sync import synchronise_landmarks, tutor_frame_map
 from analysis.landmarks import Segments
-from analysis.pipeline.gestures import GuidanceRules, align_gesture, gesture_score, guidance
+from analysis.pipeline.gestures import (
+    GuidanceRules,
+    Pace,
+    align_gesture,
+    gesture_score,
+    guidance,
+    reference_excursion,
+    repetition_pace,
+    usual_pace,
+)
 from analysis.pipeline.model import FittedModel
+from analysis.pipeline.model_parts import rotations_at
 from analysis.pipeline.prepare import Prepared
 from analysis.pipeline.results import Guidance, KeyPose
 
@@ -66,36 +77,61 @@ def tutor_repetition(start: int, k: int, sync: Synchronised, model: FittedModel)
     return k % len(reps)
 
 
-def gesture_results(
+def pace_reference(model: FittedModel) -> tuple[list[int], list[int], FloatArray, float]:
+    """The involved joints, their mirror images' joints, the tutor's excursion of both
+    (`reference_excursion`) and the tutor's repetition length (median, model frames)."""
+    papers, parts = model.components.papers, model.components
+    index = list(papers.joint_index)
+    mirror = [parts.mirror[j] for j in index]
+    reps, step = parts.tutor_reps, parts.scoring_step
+    reference = reference_excursion(papers.tutor_q, rotations_at(model.tutor, mirror), reps, step)
+    return index, mirror, reference, float(np.median([b - a + 1 for a, b in reps])) if reps else 1.0
+
+
+def session_pace(
+    prepared: Prepared, spans: Sequence[tuple[int, int]], model: FittedModel
+) -> Pace | None:
+    """The patient's usual pace in a session: the median `Pace` of its repetitions (first,
+    last frame), to judge a later session's tempo and reach against (``own``)."""
+    step = model.components.scoring_step
+    index, mirror, reference, tutor_frames = pace_reference(model)
+    paces = []
+    for start, end in spans:
+        patient = prepared.local_q[start : end + 1 : step]
+        tempo = (end - start + 1) / tutor_frames
+        paces.append(repetition_pace(patient[:, index], patient[:, mirror], reference, tempo)[0])
+    usual = usual_pace(paces)
+    return None if usual is None else replace(usual, earlier=True)
+
+
+def gesture_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds them)
     prepared: Prepared,
     segments: Segments,
     progress: FloatArray,
     sync: Synchronised,
     model: FittedModel,
+    own: Pace | None = None,
 ) -> list[GestureResult]:
-    """WOOE-DTW of every repetition with its tutor repetition, and what it gives."""
-    papers = model.components.papers
-    index = list(papers.joint_index)
-    reps = model.components.tutor_reps
-    step = model.components.scoring_step  # about 30 frames a second: plenty for a shape
-    out = []
+    """WOOE-DTW of every repetition with its tutor repetition, and what it gives; ``own``: the
+    patient's usual pace from earlier sessions (None: this session's repetitions so far)."""
+    papers, parts = model.components.papers, model.components
+    reps, step = parts.tutor_reps, parts.scoring_step  # about 30 frames a second
+    index, mirror, reference, tutor_frames = pace_reference(model)
+    out, paces = [], []
     for k, (start, end) in enumerate(zip(segments.starts, segments.ends, strict=True)):
         a, b = reps[tutor_repetition(int(start), k, sync, model)]
-        tutor_q = papers.tutor_q[a : b + 1 : step]
-        patient_q = prepared.local_q[start : end + 1 : step][:, index]
-        aligned = align_gesture(tutor_q, patient_q, papers.joint_weights)
-        tutor_progress = papers.tutor_progress[a : b + 1 : step]
-        tutor_reach = float(tutor_progress.max() - tutor_progress[0])
-        own = progress[start : end + 1 : step] - progress[start]
-        found = guidance(aligned, own, tutor_reach, RULES)
-        last = int(end)
+        patient = prepared.local_q[start : end + 1 : step]
+        aligned = align_gesture(papers.tutor_q[a : b + 1 : step], patient[:, index],
+                                papers.joint_weights)  # fmt: skip
+        tempo = (end - start + 1) / tutor_frames
+        pace, series = repetition_pace(patient[:, index], patient[:, mirror], reference, tempo)
+        paces.append(pace)
+        found = guidance(aligned, series, pace, own or usual_pace(paces), RULES)
         shifted = tuple(
-            Guidance(
-                g.type,
-                (int(start) + step * g.frames[0], min(last, int(start) + step * g.frames[1])),
-            )
+            Guidance(g.type, (int(start) + step * g.frames[0],
+                              min(int(end), int(start) + step * g.frames[1])))
             for g in found
-        )
+        )  # fmt: skip
         out.append(GestureResult(
             guidance=shifted, score=gesture_score(aligned.mean_cost, papers.gesture_scale),
             alignment_tau=aligned.alignment_tau, similarity=aligned.similarity_deg,

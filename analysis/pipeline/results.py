@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from analysis.clinical.results import AngleRange, WorkspaceSummary
 from analysis.feedback import Comment, LandmarkAssessment
 from analysis.feedback.advice import Advice
 
@@ -167,58 +168,26 @@ def _guidance_from_json(data: Mapping[str, Any]) -> tuple[Guidance, ...]:
 
 
 @dataclass(frozen=True)
-class AngleRange:
-    """The smallest and largest value of one anatomical angle over a stretch, and their span,
-    in degrees (flexion and abduction positive, 0 in the anatomical standing pose)."""
+class ExerciseMatch:
+    """Whether the recording shows the exercise (`analysis.pipeline.match`): when it does not,
+    a plain ``message`` and the id of the clinic's exercise it ``looks_like`` (None if none)."""
 
-    min: float
-    max: float
-
-    @property
-    def range(self) -> float:
-        return round(self.max - self.min, 2)
+    fits: bool = True
+    message: str = ""
+    looks_like: str | None = None
 
     def to_json(self) -> JSON:
-        return {"min": self.min, "max": self.max, "range": self.range}
+        if self.fits:
+            return {"fits": True}
+        return {"fits": False, "message": self.message, "looks_like": self.looks_like}
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> AngleRange:
-        return cls(float(data["min"]), float(data["max"]))
-
-
-@dataclass(frozen=True)
-class WorkspaceSummary:
-    """One hand's reachable workspace as stored: the share of the frontal hemisphere around the
-    shoulder its path covers (0..1), per quadrant (``upper_medial`` … 0..0.25 each), and a small
-    hull of the covered patch for a 3D view (unit sphere, arm lengths; X anterior, Y superior,
-    Z lateral), decimated to a few dozen vertices (`analysis.clinical.stored`)."""
-
-    side: str
-    relative_area: float
-    quadrants: Mapping[str, float] = field(default_factory=dict)
-    vertices: tuple[tuple[float, float, float], ...] = ()
-    faces: tuple[tuple[int, int, int], ...] = ()
-
-    def to_json(self) -> JSON:
-        return {
-            "side": self.side,
-            "relative_area": self.relative_area,
-            "quadrants": dict(self.quadrants),
-            "vertices": [list(v) for v in self.vertices],
-            "faces": [list(f) for f in self.faces],
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> WorkspaceSummary:
-        return cls(
-            side=str(data.get("side", "")),
-            relative_area=float(data.get("relative_area", 0.0)),
-            quadrants={str(k): float(v) for k, v in (data.get("quadrants") or {}).items()},
-            vertices=tuple(
-                (float(x), float(y), float(z)) for x, y, z in data.get("vertices") or ()
-            ),
-            faces=tuple((int(a), int(b), int(c)) for a, b, c in data.get("faces") or ()),
-        )
+    def from_json(cls, data: Mapping[str, Any] | None) -> ExerciseMatch:
+        """Runs stored before the check always fitted."""
+        if not data or data.get("fits", True):
+            return cls()
+        other = data.get("looks_like")
+        return cls(False, str(data.get("message", "")), None if other is None else str(other))
 
 
 def assessment_to_json(item: LandmarkAssessment) -> JSON:
@@ -237,7 +206,7 @@ class AnalysisSummary:
     fps: float
     landmarks: tuple[KeyPose, ...]
     repetitions: tuple[RepetitionResult, ...]
-    score: float
+    score: float | None  # None when the recording does not fit the exercise (``match``)
     assessment: tuple[LandmarkAssessment, ...] = ()
     feedback: tuple[Comment, ...] = ()
     gamma: Mapping[str, float] = field(default_factory=dict)
@@ -252,8 +221,13 @@ class AnalysisSummary:
     clinical_angles: Mapping[str, AngleRange] = field(default_factory=dict)
     # "left" / "right" -> reachable workspace of that hand; only for exercises of the arms
     workspace: Mapping[str, WorkspaceSummary] = field(default_factory=dict)
+    # every angle name absent from clinical_angles -> why it is not a measurement (plain words:
+    # a segment the capture lacks, or readings beyond the body's limits); empty in older runs
+    clinical_notes: Mapping[str, str] = field(default_factory=dict)
     # the few most important corrections and what went well; empty in runs stored before
     advice: Advice = field(default_factory=Advice)
+    # whether the recording shows the exercise at all; runs stored before always fitted
+    match: ExerciseMatch = field(default_factory=ExerciseMatch)
 
     @property
     def repetition_count(self) -> int:
@@ -286,8 +260,10 @@ class AnalysisSummary:
             "periodic": self.periodic.to_json(),
             "pass_threshold": self.pass_threshold,
             "clinical_angles": {k: v.to_json() for k, v in self.clinical_angles.items()},
+            "clinical_notes": dict(self.clinical_notes),
             "workspace": {k: v.to_json() for k, v in self.workspace.items()},
             "advice": self.advice.to_json(),
+            "match": self.match.to_json(),
         }
 
     @classmethod
@@ -299,7 +275,7 @@ class AnalysisSummary:
             fps=float(data.get("fps", 0.0)),
             landmarks=tuple(KeyPose.from_json(m) for m in data.get("landmarks", ())),
             repetitions=tuple(RepetitionResult.from_json(r) for r in data.get("repetitions", ())),
-            score=float(data.get("score", 0.0)),
+            score=_optional_float(data.get("score", 0.0)),
             assessment=tuple(LandmarkAssessment.from_dict(a) for a in data.get("assessment", ())),
             feedback=tuple(comment_from_json(c) for c in data.get("feedback", ())),
             gamma={str(k): float(v) for k, v in (data.get("gamma") or {}).items()},
@@ -320,5 +296,7 @@ class AnalysisSummary:
                 str(k): WorkspaceSummary.from_json(v)
                 for k, v in (data.get("workspace") or {}).items()
             },
+            clinical_notes={str(k): str(v) for k, v in (data.get("clinical_notes") or {}).items()},
             advice=Advice.from_json(data.get("advice")),
+            match=ExerciseMatch.from_json(data.get("match")),
         )

@@ -19,13 +19,19 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh import Motion
-from analysis.clinical import angle_ranges, angle_series
-from analysis.clinical.stored import repetition_angles, workspace_summaries
+from analysis.bvh.plausibility import DEFAULT_LIMITS, Limits
+from analysis.clinical import angle_ranges, measure
+from analysis.feedback import Comment
+from analysis.feedback.advice import Advice
+from analysis.pipeline.advice_stage import plain_errors_fail
+from analysis.pipeline.clinical_stage import repetition_angles, workspace_summaries
+from analysis.pipeline.gestures import Pace
 from analysis.pipeline.keyposes import KeyPoseRepetitions, key_pose_repetitions, periodic_analysis
+from analysis.pipeline.match import MatchContext, check_fit
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import Prepared, mirrored, prepare, progress_signal
 from analysis.pipeline.repetition_stage import gesture_results, synchronise
-from analysis.pipeline.results import AnalysisSummary, KeyPose, RepetitionResult
+from analysis.pipeline.results import AnalysisSummary, ExerciseMatch, KeyPose, RepetitionResult
 from analysis.pipeline.stages import (
     assess_landmarks,
     feedback_items,
@@ -36,6 +42,7 @@ from analysis.pipeline.stages import (
     repetition_results,
     tempo_median,
 )
+from analysis.pipeline.still_advice import still_advice
 
 Progress = Callable[[str, float], None]
 FloatArray = npt.NDArray[np.float64]
@@ -83,6 +90,7 @@ STAGES = [
     ("landmark_refining", "refining key poses"),
     ("periodic_analysis", "checking the order of key poses"),
     ("repetitions", "counting repetitions"),
+    ("match", "checking that the recording shows the exercise"),
     ("synchronisation", "matching the reference in time"),
     ("alignment", "comparing each repetition"),
     ("assessment", "assessing each key pose"),
@@ -100,13 +108,22 @@ def analyse(
     model: FittedModel,
     history: Mapping[str, float] | None = None,
     on_progress: Progress | None = None,
+    limits: Limits = DEFAULT_LIMITS,
+    *,
+    match: MatchContext | None = None,
+    own_pace: Pace | None = None,
 ) -> AnalysisResult:
-    """Analyse one recording (see the module docstring)."""
+    """Analyse one recording (see the module docstring); ``limits``: what a recording may be
+    (`analysis.bvh.plausibility`, checked before anything is mapped or resampled); ``match``:
+    the exercise's name and the clinic's other exercises, for a recording that does not fit
+    (`analysis.pipeline.match`: then no repetition and no score); ``own_pace``: the patient's
+    usual tempo and reach from an earlier session (`repetition_stage.session_pace`), which
+    paper 001's guidance judges this one against as well as against the tutor."""
     timer = StageTimer(on_progress, STAGES)
     parts = model.components
     papers = parts.papers
     with timer("prepare"):
-        prepared = prepare(motion, model.tutor.skeleton, model.fps, parts.axis.rep_frames)
+        prepared = prepare(motion, model.tutor.skeleton, model.fps, parts.axis.rep_frames, limits)
         progress, used_mirror = progress_signal(prepared, parts.axis, parts.mirror)
     with timer("landmark_identification"):
         identified = papers.landmarks.identify(prepared.motion)
@@ -117,6 +134,12 @@ def analyse(
     with timer("repetitions"):
         cut = key_pose_repetitions(kept, origin, papers.landmarks, progress, parts.axis.rep_frames)
         landmarks = _shown_landmarks(cut, prepared, model)
+    with timer("match"):
+        points = mirrored(prepared.points, parts.mirror) if used_mirror else prepared.points
+        found = int(cut.segments.starts.size)
+        fit = check_fit(prepared.motion, points, progress, found, model, match)
+    if not fit.fits:
+        return _unfit(prepared, model, (fit, cut, used_mirror), timer, on_progress)
     with timer("synchronisation"):
         sync = synchronise(landmarks, model)
     with timer("alignment"):
@@ -124,7 +147,7 @@ def analyse(
         scored = prepared
         if used_mirror:
             scored = replace(prepared, points=mirrored(prepared.points, parts.mirror))
-        gestures = gesture_results(prepared, cut.segments, progress, sync, model)
+        gestures = gesture_results(prepared, cut.segments, progress, sync, model, own_pace)
     with timer("assessment"):  # before the scores: a clearly missed key pose caps its repetition
         assessment = assess_landmarks(prepared, landmarks, model)
     with timer("scores"):
@@ -135,12 +158,16 @@ def analyse(
         gamma = performance_level(assessment, history)
     with timer("adjustment"):
         playback = playback_arrays(prepared, landmarks, model, gamma)
-    with timer("clinical_angles"):
-        series = angle_series(prepared.motion)
-        angles = angle_ranges(series)
+    with timer("clinical_angles"):  # only what the recording measures; notes say why not
+        measured = measure(prepared.motion)
+        series, angles = measured.series, angle_ranges(measured.series)
         repetitions = repetition_angles(series, repetitions)
+        # a plain error (a main angle far short, a trunk lean held) fails its repetition
+        repetitions = plain_errors_fail(repetitions, model, used_mirror, prepared.motion)
     with timer("feedback"):  # after the angles: corrections compare them with the tutor's
-        advice, feedback = feedback_items(repetitions, assessment, model, used_mirror)
+        advice, feedback = feedback_items(
+            repetitions, assessment, model, used_mirror, prepared.motion
+        )
     with timer("workspace"):
         workspace = workspace_summaries(prepared.motion, model.involved_joints)
     if on_progress is not None:
@@ -163,8 +190,41 @@ def analyse(
         periodic=periodic,
         pass_threshold=papers.threshold.value,
         clinical_angles=angles,
+        clinical_notes=measured.notes,
         workspace=workspace,
     )
+    return AnalysisResult(summary, playback)
+
+
+def _unfit(
+    prepared: Prepared,
+    model: FittedModel,
+    found: tuple[ExerciseMatch, KeyPoseRepetitions, bool],
+    timer: StageTimer,
+    on_progress: Progress | None,
+) -> AnalysisResult:
+    """A recording that does not show the exercise: no repetition, no score, no level; its
+    joint angles, reach and playback (the tutor at its own pace) are still measured."""
+    fit, cut, used_mirror = found
+    with timer("adjustment"):
+        playback = playback_arrays(prepared, (), model, {})
+    with timer("clinical_angles"):
+        measured = measure(prepared.motion)
+        angles = angle_ranges(measured.series)
+    with timer("feedback"):  # the exercise's own parts left (nearly) still: say which
+        advice = still_advice(measured.series, model) if fit.looks_like is None else Advice()
+    with timer("workspace"):
+        workspace = workspace_summaries(prepared.motion, model.involved_joints)
+    if on_progress is not None:
+        on_progress("done", 1.0)
+    summary = AnalysisSummary(
+        frames=prepared.n_frames, fps=round(prepared.motion.fps, 6), landmarks=(),
+        repetitions=(), score=None, mirrored=used_mirror, advice=advice,
+        feedback=tuple(Comment(c.frame, c.text) for c in advice.corrections),
+        range_of_motion=joint_ranges(prepared, model), timings_ms=timer.timings,
+        segmentation=cut.segmentation, pass_threshold=model.components.papers.threshold.value,
+        clinical_angles=angles, clinical_notes=measured.notes, workspace=workspace, match=fit,
+    )  # fmt: skip
     return AnalysisResult(summary, playback)
 
 

@@ -12,15 +12,11 @@ import numpy.typing as npt
 
 from analysis.adjustment import Performance, demonstration_skeletons, gamma_vector
 from analysis.assessment import landmark_features, repetition_features, update_levels
-from analysis.assessment.findings import (
-    RepetitionMeasures,
-    findings,
-    swapped_side,
-    tutor_ranges,
-    tutor_spreads,
-)
+from analysis.assessment.findings import findings, swapped_side, tutor_ranges, tutor_spreads
 from analysis.assessment.joints import N_LEVELS
+from analysis.assessment.limbs import arm_first
 from analysis.assessment.scoring import MISSED_CAP, missed_key_pose
+from analysis.bvh import Motion
 from analysis.clinical import angle_ranges, angle_series
 from analysis.clinical.labels import angle_part
 from analysis.feedback import Comment, Grammar, LandmarkAssessment
@@ -29,6 +25,7 @@ from analysis.feedback.text import correction_rules
 from analysis.kinematics import flatten, range_of_motion, relative_to_start, translations
 from analysis.kinematics import quaternions as quat
 from analysis.landmarks import Segments
+from analysis.pipeline.advice_stage import recording_passed, repetition_measures, tutor_reference
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import Prepared
 from analysis.pipeline.repetition_stage import GestureResult
@@ -147,21 +144,19 @@ def feedback_items(
     assessment: tuple[LandmarkAssessment, ...],
     model: FittedModel,
     mirrored: bool,
+    motion: Motion | None = None,
 ) -> tuple[Advice, tuple[Comment, ...]]:
     """The corrections and what went well (`analysis.feedback.advice`), said by the exercise's
     grammar; and the feedback list: the corrections at the frame where each first happened,
     then, for an older grammar written per key pose, its comments with repeats left out."""
     grammar = Grammar.parse(model.grammar)
-    tutor, spread = tutor_angle_ranges(model)
-    measures = [
-        RepetitionMeasures(
-            r.start, {k: v.range for k, v in r.clinical_angles.items()}, r.tempo, r.passed
-        )
-        for r in repetitions
-    ]
-    found = findings(measures, tutor, mirrored, spread)
-    fallback = None if grammar.has_findings else Grammar(tuple(correction_rules()))
-    advice = advise(grammar, found, len(repetitions), main_part(tutor), fallback)
+    reference = tutor_reference(model)
+    measures = repetition_measures(repetitions, motion)
+    passed = recording_passed(repetitions, model)
+    found = arm_first(findings(measures, reference, mirrored, passed=passed))
+    # the default sentences say what a grammar written before a kind of finding has no rule for
+    fallback = Grammar(tuple(correction_rules()))
+    advice = advise(grammar, found, len(repetitions), main_part(reference.ranges), fallback)
     comments = [Comment(c.frame, c.text) for c in advice.corrections]
     said = {c.text for c in comments}
     for comment in grammar.comments(list(assessment)) if not grammar.has_findings else ():

@@ -1,8 +1,11 @@
 """Files that common readers open although they bend the BVH format: each loads, and
 `Motion.warnings` says what was bent. Malformed neighbours of each quirk still raise `BVHError`."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from analysis.bvh import BVHError, read
 from analysis.kinematics import positions
@@ -120,3 +123,91 @@ def test_position_channels_near_the_offset_replace_it():
 def test_warnings_survive_slicing():
     motion = read(S.replace("ROOT Hips", "JOINT Hips"))
     assert motion.with_frames(motion.frames[:1]).warnings == motion.warnings
+
+
+# Issue 25: two third-party files ---------------------------------------------------------------
+
+QUIRKS = Path(__file__).parent / "fixtures" / "quirks"
+RIGS = Path(__file__).resolve().parents[2] / "data" / "rigs"
+
+
+def reference_positions(motion) -> np.ndarray:
+    """World positions as readers that compose 4×4 transforms compute them (fairmotion, the
+    Meredith–Maddock description): global = parent · T(OFFSET) · T(position channels) · R, with R
+    the rotation channels composed intrinsically in declared order (scipy's upper-case axes).
+    Independent of `analysis.kinematics`; ``motion.frames`` hold the replacing convention, so the
+    position channels here are the values minus the OFFSET."""
+    sk = motion.skeleton
+    out = np.empty((motion.n_frames, len(sk.names), 3))
+    for f, row in enumerate(motion.frames):
+        glob: list[np.ndarray] = []
+        for j, channels in enumerate(sk.channels):
+            start = int(sk.channel_starts[j])
+            local = np.eye(4)
+            local[:3, 3] = sk.offsets[j]
+            rotation_axes = "".join(c[0] for c in channels if c.endswith("rotation"))
+            angles = [row[start + k] for k, c in enumerate(channels) if c.endswith("rotation")]
+            for k, c in enumerate(channels):
+                if c.endswith("position"):
+                    local["XYZ".index(c[0]), 3] += row[start + k]
+            if rotation_axes:
+                local[:3, :3] = Rotation.from_euler(rotation_axes, angles, degrees=True).as_matrix()
+            parent = sk.parents[j]
+            glob.append(local if parent < 0 else glob[parent] @ local)
+            out[f, j] = glob[j][:3, 3]
+    return out
+
+
+def test_end_site_with_digits_glued_reads_as_end_site_with_a_warning():
+    motion = read(QUIRKS / "end_site_numbered.bvh")
+    assert motion.skeleton.names == ("Hips", "LeftUpLeg", "LeftLeg", "Spine")
+    np.testing.assert_array_equal(motion.skeleton.end_site_offsets, [[0, -38, 0], [0, 50, 0]])
+    assert motion.warnings == (
+        "line 14: read 'End Site4' as 'End Site'",
+        "line 24: read 'End Site12' as 'End Site'",
+    )
+    np.testing.assert_allclose(positions(motion)[0, 2], [9, 50, 0])
+
+
+@pytest.mark.parametrize("word", ["SiteX", "Site4b", "Sites", "4"])
+def test_end_followed_by_other_words_is_still_refused_with_the_line(word):
+    text = (QUIRKS / "end_site_numbered.bvh").read_text().replace("End Site4", f"End {word}")
+    with pytest.raises(BVHError, match=f"expected 'End Site' but found 'End {word}'") as caught:
+        read(text)
+    assert caught.value.line == 14
+
+
+def test_makehuman_benchmark_places_every_joint_as_transform_composing_readers_do():
+    """MakeHuman writes every joint's position values as displacements from its rest place, the
+    root's included (its values are near minus its OFFSET): the root stands at the origin."""
+    motion = read(QUIRKS / "makehuman_benchmark_like.bvh")
+    assert "(the root's too)" in motion.warnings[0]
+    ours = positions(motion)
+    np.testing.assert_allclose(ours[0, 0], [-0.057191, -0.030466, -0.003066], atol=1e-6)
+    np.testing.assert_allclose(ours, reference_positions(_as_displacements(motion)), atol=1e-9)
+    np.testing.assert_allclose(ours[1, 0] - ours[0, 0], [0.01, 0, 0], atol=1e-9)
+
+
+def _as_displacements(motion):
+    """The motion with its frames back as written in a displacement file (values minus OFFSET on
+    every position channel), for `reference_positions` to add the OFFSET as such readers do."""
+    sk, frames = motion.skeleton, motion.frames.copy()
+    for j, channels in enumerate(sk.channels):
+        for k, c in enumerate(channels):
+            if c.endswith("position"):
+                frames[:, int(sk.channel_starts[j]) + k] -= sk.offsets[j, "XYZ".index(c[0])]
+    return motion.with_frames(frames)
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in RIGS.glob("*.bvh")))
+def test_forward_kinematics_agrees_with_transform_composing_readers_on_every_rig(name):
+    """Where readers agree among themselves, so do we: every joint relative to the root on every
+    third-party rig file, and world positions where the root's OFFSET is zero."""
+    motion = read(RIGS / name)
+    motion = motion.with_frames(motion.frames[:: max(motion.n_frames // 5, 1)])
+    ours = positions(motion)
+    theirs = reference_positions(_as_displacements(motion))
+    scale = float(np.abs(ours).max())
+    np.testing.assert_allclose(ours - ours[:, :1], theirs - theirs[:, :1], atol=1e-9 * scale)
+    if not motion.skeleton.offsets[0].any():
+        np.testing.assert_allclose(ours, theirs, atol=1e-9 * scale)

@@ -76,3 +76,19 @@ def test_bad_build_arguments_exit_2(tmp_path, capsys):
                  "--out", str(tmp_path / "m")])  # fmt: skip
     assert code == 2
     assert "whole numbers" in capsys.readouterr().err
+
+
+def test_an_absurd_frame_time_exits_2_with_the_plain_reason_before_resampling(
+    model_path, tmp_path, capsys
+):
+    """Issue 25: ``Frame Time: 1000`` was accepted and resampled to millions of frames."""
+    text = gzip.decompress((DATA / "reps/m07_s01_e01.bvh.gz").read_bytes()).decode()
+    absurd = tmp_path / "absurd.bvh"
+    absurd.write_text(text.replace("Frame Time: 0.033333", "Frame Time: 1000"))
+    capsys.readouterr()
+    assert main(["analyse", "--model", str(model_path), str(absurd), "--json"]) == 2
+    out = capsys.readouterr()
+    assert out.out == ""
+    (line,) = out.err.strip().splitlines()
+    assert line.startswith("error: The file says each frame lasts 1000 s")
+    assert "Export the recording again" in line

@@ -89,17 +89,17 @@ def test_findings_name_the_shortfall_the_compensation_and_what_went_well() -> No
     assert findings(_reps([90.0], [5.0], tempo=0.4), tutor)[0].kind == "fast"
 
 
-def test_a_noisy_angle_gets_a_wide_tolerance_and_a_passed_repetition_a_plain_one() -> None:
+def test_a_noisy_angle_gets_a_wide_tolerance_and_a_passed_repetition_no_correction() -> None:
     tutor = {"knee_flexion_left": 90.0, "trunk_flexion": 5.0}
     reps = _reps([60.0, 62.0], [5.0, 5.0])  # 29° short: beyond the 27° floor of a 90° range
     assert [f.kind for f in findings(reps, tutor)] == ["less"]
     # the tutor's own knee range wandered by 20° SD: 29° short is within its 40° tolerance
     assert [f.kind for f in findings(reps, tutor, spread={"knee_flexion_left": 20.0})] == ["good"]
-    # the same repetitions scored a pass: only a difference 3 tolerances wide is said
+    # the same repetitions scored a pass: no correction contradicts it (issue 26)
     passed = [RepetitionMeasures(r.start, r.ranges, 0.4, passed=True) for r in reps]
     assert [f.kind for f in findings(passed, tutor)] == []  # nor "went well": it is 29° short
     far = [RepetitionMeasures(0, {"knee_flexion_left": 5.0}, 1.0, passed=True)]
-    assert findings(far, tutor)[0].kind == "less"
+    assert findings(far, tutor) == []
 
 
 def test_the_cold_boundary_is_in_the_tutors_own_repetition_distance() -> None:
@@ -140,9 +140,11 @@ def test_a_therapists_sentence_wins_and_unknown_fields_stay_visible() -> None:
 
 def test_stored_results_keep_the_advice_and_older_runs_read_without_it() -> None:
     assert AnalysisSummary.from_json({"score": 80}).advice == Advice()
-    name = "sessions/m07_s01_correct.bvh.gz"
+    # a scaption whose arm rises to about half the demonstration's (issue 26: an abduction
+    # whose arm rises as far, m07_s02_incorrect, gets no correction of its range)
+    name = "sessions/m10_s01_correct.bvh.gz"
     model = build_model(read(DATA / name), *landmarks(name))
-    result = analyse(read(DATA / "sessions/m07_s02_incorrect.bvh.gz"), model).summary
+    result = analyse(read(DATA / "sessions/m10_s05_incorrect.bvh.gz"), model).summary
     assert result.pass_threshold == PASS_SCORE
     assert result.score < PASS_SCORE
     assert 1 <= len(result.advice.corrections) <= MAX_CORRECTIONS

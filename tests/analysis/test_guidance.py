@@ -13,6 +13,8 @@ from analysis.bvh import read
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics import rotations
 from analysis.pipeline import analyse, build_model
+from analysis.pipeline.prepare import prepare
+from analysis.pipeline.repetition_stage import session_pace
 from tests.analysis.guidance_cases import modified, range_scaled, retimed
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
@@ -46,8 +48,14 @@ def test_generator_retimes_and_scales_the_movement(squat):
     ("kind", "factor", "expected"), [("tempo", 1.6, "too slow"), ("range", 0.6, "incomplete")]
 )
 def test_the_mistake_is_named_first_with_its_frames(squat, kind, factor, expected):
+    """Judged against the tutor and against this patient's pace in an earlier session (the
+    unmodified take), as `bench.eval_guidance` does."""
     model, session = squat
-    summary = analyse(modified(session, kind, factor), model).summary
+    reps = analyse(session, model).summary.repetitions
+    parts = model.components
+    prepared = prepare(session, model.tutor.skeleton, model.fps, parts.axis.rep_frames)
+    earlier = session_pace(prepared, [(r.start, r.end) for r in reps], model)
+    summary = analyse(modified(session, kind, factor), model, own_pace=earlier).summary
     named = [r for r in summary.repetitions if r.main_guidance == expected]
     assert len(named) >= 0.7 * summary.repetition_count
     for rep in named:

@@ -1,5 +1,5 @@
 """Other capture systems onto an exercise's skeleton: body parts found by names and structure,
-recordings retargeted by segment rotations (`analysis.bvh.map_onto`).
+recordings retargeted by segment rotations (`analysis.kinematics.map_onto`).
 
 The UI-PRMD deep squat is re-exported under a CMU-style and a Mixamo-style skeleton (other names,
 extra spine and neck joints, hip joints of zero length, Z-up, A-pose arms, other rest bone
@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.bvh import Motion, Skeleton, SkeletonMismatchError, dumps, map_onto, read
+from analysis.bvh import Motion, Skeleton, SkeletonMismatchError, dumps, read
 from analysis.bvh.rigs import identify
-from analysis.kinematics import positions
+from analysis.kinematics import map_onto, positions
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics.forward_kinematics import world
 
@@ -383,3 +383,23 @@ def test_prepare_given_the_model_skeleton_retargets_another_rig(tutor, session):
     np.testing.assert_allclose(prepared.points, same.points, atol=0.02)
     with pytest.raises(SkeletonMismatchError, match="left upper arm"):
         prepare(read(RIGS / "fairmotion_sinusoidal.bvh"), tutor.skeleton, tutor.fps, 60)
+
+
+def test_a_limb_part_out_of_order_below_a_dropped_one_is_checked_against_the_one_above():
+    """Issue 25 (a hostile file): the forearm above the upper arm is dropped, and the hand below
+    is then compared with the upper arm instead of ending in a KeyError."""
+    lines = [
+        "HIERARCHY",
+        "ROOT Hips",
+        "{",
+        "OFFSET 0 0 0",
+        "CHANNELS 3 Zrotation Xrotation Yrotation",
+    ]
+    chain = ["LeftForeArm", "LeftArm", "LeftHand"]
+    for name in chain:
+        lines += [f"JOINT {name}", "{", "OFFSET 1 0 0", "CHANNELS 3 Zrotation Xrotation Yrotation"]
+    lines += ["End Site", "{", "OFFSET 1 0 0", "}"] + ["}"] * (len(chain) + 1)
+    lines += ["MOTION", "Frames: 1", "Frame Time: 0.033333", " ".join(["0"] * 12)]
+    roles = identify(read("\n".join(lines) + "\n").skeleton)
+    assert "left_forearm" not in roles
+    assert roles.get("left_hand") == 3 and roles.get("left_upper_arm") == 2

@@ -208,7 +208,7 @@ def test_the_ui_prmd_skeleton_and_the_synthetic_one():
 
 
 def test_a_skeleton_without_legs_is_refused_naming_the_parts():
-    from analysis.bvh import map_onto
+    from analysis.kinematics import map_onto
 
     tutor = read("data/ui-prmd/reps/m01_s01_e01.bvh.gz")
     upper = build(

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from analysis.bvh import read
-from analysis.online.session import LiveSession, RateLimit
-from analysis.online.stream import Source, header_text
+from analysis.live import LiveSession, RateLimit
 from analysis.pipeline import analyse, build_model, dump_model
 from analysis.pipeline.cli import main
+from capture.stream import Source, header_text
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 TUTOR = "sessions/m07_s01_correct.bvh.gz"
@@ -190,7 +190,7 @@ def stream_through_a_dropping_server(session: LiveSession, motion, batch: int | 
     and the type of every message the server read."""
     from websockets.asyncio.server import serve
 
-    from analysis.online.remote import stream_to
+    from capture.remote import stream_to
 
     connections, kinds = [], []
 
@@ -287,7 +287,7 @@ def test_an_out_of_order_batch_is_refused_and_a_resent_one_skips_what_was_taken(
 
 
 def test_default_batch_adds_at_most_25_ms():
-    from analysis.online.remote import default_batch
+    from capture.remote import default_batch
 
     assert [default_batch(1 / fps) for fps in (30, 60, 120, 240)] == [1, 1, 3, 6]
     assert all((default_batch(1 / fps) - 1) / fps <= 0.025 for fps in (30, 100, 120, 480))
@@ -309,14 +309,17 @@ def test_live_guidance_is_the_offline_pipelines_rule(model):
     """Each live repetition gets the guidance the offline pipeline's gesture stage gives the same
     frames (Table 1 on the WOOE-DTW alignment with a tutor repetition), not a rule of its own:
     the stage run on the whole recording with the live repetitions' spans says the same, though
-    the live side computed it frame by frame from the stream."""
+    the live side computed it frame by frame from the stream. Both are told the same earlier
+    session's pace (slower and farther than this take), so there is guidance to compare."""
     from analysis.landmarks.segmentation import Segments
-    from analysis.online.live import LiveAligner
+    from analysis.live import LiveAligner, LiveOptions
+    from analysis.pipeline.gestures import Pace
     from analysis.pipeline.prepare import prepare, progress_signal
     from analysis.pipeline.repetition_stage import Synchronised, gesture_results
 
     motion = read(SESSION)
-    aligner = LiveAligner(model, motion.skeleton, motion.fps)
+    earlier = Pace(tempo=1.8, reach=1.2, earlier=True)
+    aligner = LiveAligner(model, motion.skeleton, motion.fps, LiveOptions(own_pace=earlier))
     for values in motion.frames:
         aligner.push(values)
     aligner.finish()
@@ -328,7 +331,7 @@ def test_live_guidance_is_the_offline_pipelines_rule(model):
     prepared = prepare(motion, model.tutor.skeleton, model.fps, parts.axis.rep_frames)
     progress, _ = progress_signal(prepared, parts.axis, parts.mirror)
     spans = Segments(*(np.array([r[k] for r in reps]) for k in ("start", "end", "end")))
-    offline = gesture_results(prepared, spans, progress, Synchronised({}, None), model)
+    offline = gesture_results(prepared, spans, progress, Synchronised({}, None), model, own=earlier)
     assert live == [[g.type for g in result.guidance] for result in offline]
     assert any(live), "the session needs guidance for the test to say anything"
     assert all(g["text"] for r in reps for g in r["guidance"]), "words for the patient"

@@ -117,7 +117,7 @@ def _swept_right_arm() -> list[dict]:
 
 def test_stored_workspace_only_for_exercises_of_the_arms():
     """The pipeline's workspace stage: per hand the areas and a small hull, for arm exercises."""
-    from analysis.clinical.stored import MAX_HULL_VERTICES, workspace_summaries
+    from analysis.pipeline.clinical_stage import MAX_HULL_VERTICES, workspace_summaries
     from analysis.pipeline.results import AnalysisSummary
 
     motion = posed(_swept_right_arm())

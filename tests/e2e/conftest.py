@@ -61,9 +61,10 @@ def eager_celery(settings, tmp_path):
 
 
 @pytest.fixture
-def demo(transactional_db, eager_celery):
+def demo(transactional_db, eager_celery, settings):
     from django.core.management import call_command
 
+    settings.DEMO_ALLOWED = True
     call_command("load_demo")
 
 

@@ -12,11 +12,12 @@ pytestmark = pytest.mark.e2e
 
 
 @pytest.fixture
-def demo_accounts(transactional_db, monkeypatch):
+def demo_accounts(transactional_db, monkeypatch, settings):
     """The demo loader's accounts and exercises, without analysing its recordings (slow, and
     tested in test_demo.py): the admin under test is the one `load_demo` creates."""
     from django.core.management import call_command
 
+    settings.DEMO_ALLOWED = True
     monkeypatch.setattr("webapp.demo.clinic.load_recordings", lambda *args: None)
     call_command("load_demo")
 

@@ -87,7 +87,7 @@ def test_home_follows_an_analysis_live_and_patients_see_their_own(page, live_ser
     log_in(page, live_server.url, "demo-patient")
     page.goto(f"{live_server.url}/")
     assert page.locator("#prescriptions li").count() == 2  # Deep squat, Shoulder abduction
-    assert "Last two weeks:" in page.inner_text("#prescriptions")
+    assert "Last 4 weeks:" in page.inner_text("#prescriptions")
     assert page.locator("#attention").count() == 0
     assert "Robin Second" not in page.content()
     assert page.locator("#recent-rows tr").count() == 4

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import gzip
+
 import pytest
 from asgiref.sync import async_to_sync
 from channels.testing import WebsocketCommunicator
 from rest_framework.test import APIClient
 
 from analysis.bvh import read
-from analysis.online.stream import header_text
+from analysis.live import header_text
+from tests.personas import FIXTURES
 from webapp.accounts.tokens import issue_token
 from webapp.asgi import application
 from webapp.live import consumers
@@ -348,3 +351,22 @@ def test_a_batch_is_answered_in_one_message_and_a_bad_frame_spoils_only_itself(
     assert ready["next_seq"] == 8  # frame 5 used up its number; 20.. refused
     state = consumers.SESSIONS[created["id"]]
     assert len(state.frames) == 7 and state.errors == 2
+
+
+def test_failed_repetitions_hear_why_and_no_praise(world, exercise_with_model, settings):
+    """An incorrect take streamed over the WebSocket: the words each repetition event carries
+    (what the live page shows and speaks) praise only passed repetitions."""
+    settings.LIVE_MAX_FPS = settings.LIVE_BURST = 1e9  # every frame taken, however fast
+    key, created = create_session(world.therapist, world.patient, exercise_with_model)
+    content = gzip.decompress((FIXTURES / "sessions/m07_s02_incorrect.bvh.gz").read_bytes())
+    events = async_to_sync(stream)(created["ws"], key, content)
+    assert events[-1]["dropped"] == 0
+    reps = [e for e in events if e["event"] == "repetition"]
+    failed = [r for r in reps if not r["passed"]]
+    assert len(failed) >= 3
+    assert all("well done" not in r["words"].lower() for r in failed)
+    assert all("score" in r["words"] or r["guidance"] for r in failed)
+    passed = [r for r in reps if r["passed"]]
+    assert passed and all(
+        r["words"].endswith("well done.") or r["guidance"][0]["text"] in r["words"] for r in passed
+    )

@@ -159,3 +159,19 @@ def test_page_fills_the_default_grammar_until_one_is_saved(client, world, exerci
     again = client.get(url("annotate", exercise))
     assert again.context["grammar"] == 'type$1 -> F:"Well done"'
     assert again.context["grammar_is_default"] is False
+
+
+def test_grammar_check_refuses_unknown_body_parts_and_key_pose_types(client, world, exercise):
+    """Issue 25: `@banana$3` and `type$9` answered "Valid" and never fired."""
+    client.force_login(world.therapist)
+    for rule, words, known in [
+        ('type$2 & @banana$3 -> F:"Peel it"', "no body part 'banana'", "left_"),
+        ('type$9 -> F:"Never said"', "no key-pose type 9", "1 (start)"),
+    ]:
+        text = 'type$1 -> F:"Ready"\n' + rule + "\n"
+        answer = client.post(
+            url("grammar", exercise), {"text": text}, content_type="application/json"
+        )
+        verdict = answer.json()
+        assert verdict["valid"] is False and verdict["line"] == 2
+        assert words in verdict["message"] and known in verdict["message"]

@@ -42,6 +42,9 @@ def test_patient_page_links_every_recording_with_score_and_status_page_by_page(c
 @pytest.mark.django_db
 def test_a_patient_uploads_for_themselves_among_their_prescribed_exercises(world):
     squat, reach = exercise(world.clinic), exercise(world.clinic, "Reach")
+    for marked in (squat, reach):  # key poses marked: an exercise without them is not offered
+        marked.tutor_landmark_frames, marked.tutor_landmark_types = [0, 40], [1, 2]
+        marked.save()
     prescribe(world.patient, squat)
     prescribe(world.other_patient, reach)
     mine = upload_choices(world.patient_user)

@@ -172,7 +172,7 @@ def test_patient_home_shows_own_prescriptions_and_recordings(client, world):
     client.force_login(world.patient_user)
     page = client.get(reverse(HOME)).content.decode()
     assert "Your exercises" in page and "Deep squat" in page
-    assert "Last two weeks: 1 of 4 sessions done" in page
+    assert "Last 4 weeks: 1 of 8 sessions done" in page
     assert ">88<" in page and ">12<" not in page
     assert "Bob Example" not in page
     assert "Patients needing attention" not in page

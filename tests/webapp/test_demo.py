@@ -8,7 +8,8 @@ from webapp.patients.models import Patient
 
 
 @pytest.mark.django_db
-def test_demo_clinic_loads_once(client):
+def test_demo_clinic_loads_once(client, settings):
+    settings.DEMO_ALLOWED = True  # as `make demo` sets it
     call_command("load_demo")
     call_command("load_demo")  # idempotent: nothing created or analysed twice
     assert Clinic.objects.filter(name="Demo clinic").count() == 1
@@ -30,9 +31,30 @@ def test_demo_clinic_loads_once(client):
 @pytest.mark.django_db
 def test_demo_refused_in_production(settings):
     settings.DEMO_ALLOWED = False
-    with pytest.raises(CommandError):
+    with pytest.raises(CommandError, match="DEMO_ALLOWED=1"):
         call_command("load_demo")
     assert not User.objects.filter(username="demo-therapist").exists()
+
+
+def test_the_demo_loader_is_off_unless_switched_on_whatever_debug_says(tmp_path):
+    """DEMO_ALLOWED, not DEBUG, lets the loader run: off by default with DEBUG on or off."""
+    import subprocess
+    import sys
+
+    show = "import django; django.setup(); from django.conf import settings as s; "
+    show += "print(s.DEMO_ALLOWED)"
+    base = {
+        "PATH": "/usr/bin:/bin",
+        "DJANGO_SETTINGS_MODULE": "webapp.settings",
+        "DATA_DIR": str(tmp_path),
+        "SECRET_KEY": "a-test-key-that-is-not-the-development-one",
+    }
+    answers = [
+        subprocess.run([sys.executable, "-c", show], env={**base, **extra}, capture_output=True,
+                       text=True, check=True).stdout.split()[-1]
+        for extra in ({"DEBUG": "1"}, {"DEBUG": "0"}, {"DEBUG": "0", "DEMO_ALLOWED": "1"})
+    ]  # fmt: skip
+    assert answers == ["False", "False", "True"]
 
 
 def assert_analysed_recordings_and_models():

@@ -47,6 +47,9 @@ OWN_OBJECT: Statuses = (200, 200, 200, 404, 200, 404, 302)
 OWN_API_OBJECT: Statuses = (200, 200, 200, 404, 200, 404, 401)
 OWN_REPORT_PDF: Statuses = (202, 202, 202, 404, 202, 404, 302)
 OWN_API_REPORT: Statuses = (202, 202, 202, 404, 202, 404, 401)
+ADMIN_ONLY_PAGE: Statuses = (403, 403, 200, 403, 403, 403, 302)
+ADMIN_ONLY_ACTION: Statuses = (403, 403, 302, 403, 403, 403, 302)
+ADMIN_ONLY_API: Statuses = (403, 403, 200, 403, 403, 403, 401)
 
 CASES = [
     Case("healthz", None, "get", EVERYONE_200),
@@ -70,6 +73,17 @@ CASES = [
     # The therapist's token: they and the clinic admin may revoke it, a colleague cannot see it.
     Case("accounts:token-revoke", "token", "post", (302, 404, 302, 404, 403, 403, 302)),
     Case("audit:events", None, "get", (403, 403, 200, 403, 403, 403, 302)),
+    # The team page and its actions are the clinic admin's (the account named is the colleague);
+    # the therapist invites their own patient from the patient page, not a colleague's.
+    Case("accounts:team", None, "get", ADMIN_ONLY_PAGE),
+    Case("accounts:team-deactivate", "account", "post", ADMIN_ONLY_ACTION),
+    Case("accounts:team-reactivate", "account", "post", ADMIN_ONLY_ACTION),
+    Case("accounts:team-password-link", "account", "post", ADMIN_ONLY_PAGE),
+    Case("accounts:team-withdraw-link", "link", "post", ADMIN_ONLY_ACTION),
+    Case("accounts:invite-patient", "patient", "get", (200, 403, 200, 404, 403, 403, 302)),
+    # A one-time link's page opens for anyone holding the link (opening it spends nothing).
+    Case("accounts:invitation", "invitation-link", "get", EVERYONE_200),
+    Case("accounts:new-password", "password-link", "get", EVERYONE_200),
     Case("dashboard:home", None, "get", SIGNED_IN_PAGE),
     Case("patients:list", None, "get", STAFF_PAGE),
     Case("patients:create", None, "get", STAFF_PAGE),
@@ -97,6 +111,12 @@ CASES = [
     Case("recordings:corrections", "recording", "get", STAFF_ONLY_OBJECT),
     # The recording's exercise is set, so confirming redirects to the recording.
     Case("recordings:confirm", "recording", "get", (302, 302, 302, 404, 302, 404, 302)),
+    # Moving and deleting (the form, the confirmation page) are for staff; the deleted list and
+    # restoring for the clinic admin, who gets 404 for a recording that is not deleted.
+    Case("recordings:move", "recording", "get", STAFF_ONLY_OBJECT),
+    Case("recordings:delete", "recording", "get", STAFF_ONLY_OBJECT),
+    Case("recordings:deleted", None, "get", (403, 403, 200, 403, 403, 403, 302)),
+    Case("recordings:restore", "recording", "post", (403, 403, 404, 403, 403, 403, 302)),
     # The token endpoint takes no session; an empty form is a 400 for everyone.
     Case("api-token", None, "post", (400, 400, 400, 400, 400, 400, 400)),
     Case("api-patients", None, "get", (200, 200, 200, 200, 200, 200, 401)),
@@ -131,6 +151,12 @@ CASES = [
     Case("live:status", "live", "get", OWN_OBJECT),
     Case("live:replay", "recording", "post", (302, 302, 302, 404, 302, 404, 302)),
     Case("api-live-sessions", None, "post", (400, 400, 400, 400, 400, 400, 401)),
+    # Accounts: an empty invitation names no role (400) for staff; patients never invite.
+    Case("api-invitations", None, "post", (400, 400, 400, 400, 403, 403, 401)),
+    Case("api-users", None, "get", ADMIN_ONLY_API),
+    Case("api-user-deactivate", "account", "post", ADMIN_ONLY_API),
+    Case("api-user-reactivate", "account", "post", ADMIN_ONLY_API),
+    Case("api-user-password-link", "account", "post", (403, 403, 201, 403, 403, 403, 401)),
 ]
 
 
@@ -143,7 +169,18 @@ def objects(world):
         clinic=world.clinic, patient=world.patient, exercise=exercise, created_by=world.therapist
     )
     return {"patient": world.patient, "exercise": exercise, "recording": recording, "token": token,
-            "live": live}  # fmt: skip
+            "live": live, **account_objects(world)}  # fmt: skip
+
+
+def account_objects(world) -> dict:
+    """The colleague's account, a pending invitation, and the keys of two one-time links."""
+    from webapp.accounts.invitations import create_invitation, create_password_link
+    from webapp.accounts.models import Role
+
+    invitation, invitation_key = create_invitation(world.clinic_admin, Role.THERAPIST)
+    _, password_key = create_password_link(world.clinic_admin, world.colleague)
+    return {"account": world.colleague, "link": invitation,
+            "invitation-link": invitation_key, "password-link": password_key}  # fmt: skip
 
 
 def url_kwargs(target: str | None, objects: dict) -> dict:
@@ -153,6 +190,10 @@ def url_kwargs(target: str | None, objects: dict) -> dict:
         return {"uidb64": "MQ", "token": "forged-reset-token"}
     if target == "guide-image":
         return {"name": "guide-home.png"}
+    if target == "account":
+        return {"pk": objects["account"].public_id}
+    if target.endswith("-link") and target != "link":
+        return {"token": objects[target]}
     return {"pk": objects[target].pk}
 
 

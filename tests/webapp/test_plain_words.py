@@ -51,8 +51,9 @@ class Page(HTMLParser):
             self.text.append(data.strip())
 
 
-def crawl(client) -> dict[str, str]:
-    """Visible text of every page reachable from "/" by same-site links (path → text)."""
+def crawl(client, html: dict[str, str] | None = None) -> dict[str, str]:
+    """Visible text of every page reachable from "/" by same-site links (path → text); `html`,
+    when given, receives each HTML page's whole markup (path → markup)."""
     seen: dict[str, str] = {}
     todo = ["/"]
     while todo and len(seen) < MAX_PAGES:
@@ -66,6 +67,8 @@ def crawl(client) -> dict[str, str]:
             continue
         page = Page()
         page.feed(response.content.decode())
+        if html is not None:
+            html[path] = response.content.decode()
         seen[path] = " | ".join(page.text)
         for href in page.links:
             parts = urlparse(urljoin(path, href))
@@ -94,7 +97,8 @@ def internal_words(text: str, joints: set[str]) -> list[str]:
 
 
 @pytest.mark.django_db
-def test_no_page_of_the_demo_shows_internal_words(client):
+def test_no_page_of_the_demo_shows_internal_words(client, settings):
+    settings.DEMO_ALLOWED = True
     call_command("load_demo")
     joints = rig_joint_names()
     assert {"LeftUpperArm", "RightLowerLeg", "HeadTip"} <= joints  # the demo rigs' own names

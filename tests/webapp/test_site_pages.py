@@ -140,8 +140,9 @@ def test_migrations_alone_create_no_demo_admin():
 
 
 @pytest.mark.django_db
-def test_load_demo_creates_the_clinic_admin_once(client, monkeypatch):
+def test_load_demo_creates_the_clinic_admin_once(client, monkeypatch, settings):
     # Only the accounts are checked here: the recordings' analyses are test_demo.py's (slow) part.
+    settings.DEMO_ALLOWED = True
     monkeypatch.setattr("webapp.demo.clinic.load_recordings", lambda *args: None)
     call_command("load_demo")
     call_command("load_demo")

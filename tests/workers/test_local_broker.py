@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -91,3 +92,111 @@ def test_a_worker_that_keeps_dying_stops_the_launcher_with_its_code(tmp_path):
     code = supervise(dying, [sys.executable, "-c", server], os.environ)
     assert code == 7
     assert time.monotonic() - started < 60, "the server was stopped, not waited for"
+
+
+STUBBORN = (
+    "import os, signal, subprocess, sys, time\n"
+    "signal.signal(signal.SIGTERM, signal.SIG_IGN)\n"  # ignores SIGTERM, and so does its child
+    "subprocess.Popen([sys.executable, '-c', 'import signal, time; "
+    "signal.signal(signal.SIGTERM, signal.SIG_IGN); time.sleep(120)'])\n"
+    "time.sleep(120)\n"
+)
+
+
+def descendants(root: int) -> set[int]:
+    table = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if fields[0] != "Z":
+            table[int(stat.parent.name)] = int(fields[1])
+    found, grew = {root}, True
+    while grew:
+        more = {pid for pid, parent in table.items() if parent in found}
+        grew = not more <= found
+        found |= more
+    return found - {root}
+
+
+def alive(pids: set[int]) -> set[int]:
+    def running(pid: int) -> bool:
+        try:
+            return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+        except OSError:
+            return False
+
+    return {pid for pid in pids if running(pid)}
+
+
+def test_sigterm_stops_what_the_launcher_started_even_what_ignores_sigterm(tmp_path):
+    """A worker and a server that ignore SIGTERM, each with a child that ignores it too: SIGTERM
+    to the launcher ends all four within STOP_SECONDS (then SIGKILL to their process groups)."""
+    script = (
+        "import sys\nfrom workers.local import supervise\n"
+        f"program = [sys.executable, '-c', {STUBBORN!r}]\n"
+        "sys.exit(supervise(program, program, {'PATH': '/usr/bin:/bin'}))\n"
+    )
+    launcher = subprocess.Popen([sys.executable, "-c", script], cwd=ROOT)
+    deadline = time.monotonic() + 30
+    while len(descendants(launcher.pid)) < 4 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    started = descendants(launcher.pid)
+    assert len(started) == 4, started
+    launcher.send_signal(signal.SIGTERM)
+    stopped = time.monotonic()
+    assert launcher.wait(timeout=15) == 0
+    while alive(started) and time.monotonic() - stopped < 10:
+        time.sleep(0.1)
+    assert not alive(started), "nothing the launcher started outlives it"
+    assert time.monotonic() - stopped < 10
+
+
+def test_what_the_launcher_started_dies_with_it_when_it_is_killed(tmp_path):
+    """SIGKILL to the launcher (no chance to clean up): its children die with it (the kernel's
+    parent-death signal)."""
+    script = (
+        "import sys\nfrom workers.local import supervise\n"
+        "program = [sys.executable, '-c', 'import time; time.sleep(120)']\n"
+        "supervise(program, program, {'PATH': '/usr/bin:/bin'})\n"
+    )
+    launcher = subprocess.Popen([sys.executable, "-c", script], cwd=ROOT)
+    deadline = time.monotonic() + 30
+    while len(descendants(launcher.pid)) < 2 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    children = descendants(launcher.pid)
+    assert len(children) == 2
+    launcher.kill()
+    launcher.wait()
+    deadline = time.monotonic() + 5
+    while alive(children) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not alive(children)
+
+
+def test_the_launcher_serves_with_debug_off_and_a_secret_key_of_its_own(tmp_path):
+    env = local_env({"DATA_DIR": str(tmp_path)})
+    assert env["DEBUG"] == "0" and env["SECURE_SSL_REDIRECT"] == "0"
+    assert env["WHITENOISE_USE_FINDERS"] == "1"
+    key = env["SECRET_KEY"]
+    assert len(key) >= 50 and (tmp_path / "secret_key").stat().st_mode & 0o777 == 0o600
+    assert local_env({"DATA_DIR": str(tmp_path)})["SECRET_KEY"] == key, "generated once"
+    assert local_env({"DATA_DIR": str(tmp_path / "other")})["SECRET_KEY"] != key
+    mine = local_env({"DATA_DIR": str(tmp_path), "DEBUG": "1", "SECRET_KEY": "k" * 60})
+    assert (mine["DEBUG"], mine["SECRET_KEY"]) == ("1", "k" * 60), "the environment wins"
+    debug, redirect = settings_flags({k: env[k] for k in env if k != "PATH"})
+    assert (debug, redirect) == (False, False)
+    assert "--noreload" in server_command("127.0.0.1:9", reload=False)
+
+
+def settings_flags(env: dict[str, str]) -> list:
+    show = (
+        "import json, django; django.setup(); from django.conf import settings as s; "
+        "print(json.dumps([s.DEBUG, s.SECURE_SSL_REDIRECT]))"
+    )
+    answer = subprocess.run(
+        [sys.executable, "-c", show], cwd=ROOT, env={**env, "PATH": "/usr/bin:/bin"},
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    return json.loads(answer.stdout.strip().splitlines()[-1])

@@ -29,6 +29,8 @@ class User(AbstractUser):
         Clinic, on_delete=models.PROTECT, null=True, blank=True, related_name="users"
     )
     role = models.CharField(max_length=20, choices=Role.choices, default=Role.THERAPIST)
+    # How pages and the API name an account (the numeric key would be guessable).
+    public_id = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
 
     @property
     def is_staff_member(self) -> bool:
@@ -78,3 +80,54 @@ class ApiToken(models.Model):
         if self.revoked_at is not None:
             return False
         return self.expires_at is None or self.expires_at > timezone.now()
+
+
+# The roles' names in the API (CONTRACTS.md: "therapist" | "admin" | "patient").
+API_ROLES = {"therapist": Role.THERAPIST, "admin": Role.CLINIC_ADMIN, "patient": Role.PATIENT}
+ROLE_NAMES = {role: name for name, role in API_ROLES.items()}
+
+
+class LinkKind(models.TextChoices):
+    INVITATION = "invitation", "Invitation"
+    PASSWORD = "password", "New password"
+
+
+class Invitation(models.Model):
+    """A one-time link: an invitation to create an account, or a link to set a new password.
+
+    Only the SHA-256 of the link's random key is stored (the link is shown once, to the person
+    who made it, and e-mailed when an address is given). A link works once, until `expires_at`.
+    An invitation for a patient creates the login of that `patient`; a password link names the
+    account (`user`) it is for; an accepted invitation names the account it created.
+    """
+
+    id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
+    clinic = models.ForeignKey(Clinic, on_delete=models.CASCADE, related_name="invitations")
+    kind = models.CharField(max_length=10, choices=LinkKind.choices, default=LinkKind.INVITATION)
+    role = models.CharField(max_length=20, choices=Role.choices)
+    patient = models.ForeignKey(
+        "patients.Patient", on_delete=models.CASCADE, null=True, blank=True, related_name="+"
+    )
+    user = models.ForeignKey(
+        User, on_delete=models.CASCADE, null=True, blank=True, related_name="account_links"
+    )
+    email = models.EmailField(blank=True)
+    key_hash = models.CharField(max_length=64, unique=True)
+    created_by = models.ForeignKey(
+        User, on_delete=models.SET_NULL, null=True, blank=True, related_name="+"
+    )
+    created_at = models.DateTimeField(auto_now_add=True)
+    expires_at = models.DateTimeField()
+    used_at = models.DateTimeField(null=True, blank=True)
+
+    class Meta:
+        ordering = ["-created_at"]
+
+    def __str__(self) -> str:
+        return f"{self.get_kind_display()} ({self.get_role_display()})"
+
+    @property
+    def is_usable(self) -> bool:
+        from django.utils import timezone
+
+        return self.used_at is None and self.expires_at > timezone.now()

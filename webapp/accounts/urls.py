@@ -1,7 +1,7 @@
 from django.contrib.auth import views as auth_views
 from django.urls import path, reverse_lazy
 
-from webapp.accounts import token_views, two_factor
+from webapp.accounts import link_views, team_views, token_views, two_factor
 
 app_name = "accounts"
 
@@ -51,4 +51,22 @@ urlpatterns = [
     path("2fa/verify/", two_factor.verify, name="2fa-verify"),
     path("tokens/", token_views.token_list, name="tokens"),
     path("tokens/<uuid:pk>/revoke/", token_views.token_revoke, name="token-revoke"),
+    path("team/", team_views.team, name="team"),
+    path(
+        "team/<uuid:pk>/deactivate/",
+        team_views.set_active,
+        {"active": False},
+        name="team-deactivate",
+    ),
+    path(
+        "team/<uuid:pk>/reactivate/",
+        team_views.set_active,
+        {"active": True},
+        name="team-reactivate",
+    ),
+    path("team/<uuid:pk>/password-link/", team_views.password_link, name="team-password-link"),
+    path("team/links/<uuid:pk>/withdraw/", team_views.withdraw_link, name="team-withdraw-link"),
+    path("invite/patient/<uuid:pk>/", team_views.invite_patient, name="invite-patient"),
+    path("invitation/<str:token>/", link_views.accept_invitation, name="invitation"),
+    path("new-password/<str:token>/", link_views.new_password, name="new-password"),
 ]

@@ -85,7 +85,7 @@ def csv_row(recording: Recording, result: AnalysisSummary) -> list[Any]:
     return [
         recording.uploaded_at.isoformat(),
         exercise_name(recording),
-        round(result.score, 2),
+        "" if result.score is None else round(result.score, 2),  # None: not the exercise
         result.repetition_count,
         passed_count(result),
         *(angles[name].range if name in angles else "" for name in ANGLE_NAMES),
@@ -183,13 +183,17 @@ def score_observation(patient: Patient, recording: Recording, result: AnalysisSu
             }
         )
     name = exercise_name(recording) or "exercise"
+    if result.score is None:  # the recording does not show the exercise: no score, and why
+        value: dict[str, Any] = {"dataAbsentReason": {"text": result.match.message}}
+    else:
+        value = {"valueQuantity": quantity(round(result.score, 2), "score", "{score}")}
     return observation(
         patient,
         recording,
         "session-score",
         code=local_code("session-score", f"Exercise session score ({name}), 0-100"),
-        valueQuantity=quantity(round(result.score, 2), "score", "{score}"),
         component=components,
+        **value,
     )
 
 

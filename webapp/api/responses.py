@@ -53,31 +53,6 @@ def progress_response(request: Request, patient_id: Any, points_json: str) -> Ht
     return Response(json.loads(body))  # the browsable API
 
 
-class AdherenceSerializer(serializers.Serializer):
-    prescription = serializers.CharField()
-    exercise = serializers.CharField()
-    exercise_name = serializers.CharField()
-    sessions_prescribed = serializers.IntegerField()
-    sessions_done = serializers.IntegerField()
-    percent = serializers.FloatField(allow_null=True)
-
-
-class PrescriptionSerializer(serializers.Serializer):
-    id = serializers.UUIDField()
-    exercise = serializers.UUIDField()
-    exercise_name = serializers.CharField()
-    sessions_per_week = serializers.IntegerField()
-    target_repetitions = serializers.IntegerField(allow_null=True)
-    start_date = serializers.DateField()
-    end_date = serializers.DateField(allow_null=True)
-    adherence = AdherenceSerializer()
-
-
-class PrescriptionsSerializer(serializers.Serializer):
-    patient = serializers.UUIDField()
-    prescriptions = PrescriptionSerializer(many=True)
-
-
 class ResultRepetitionSerializer(serializers.Serializer):
     start = serializers.IntegerField()
     end = serializers.IntegerField()

@@ -149,6 +149,10 @@ class AnalysisResultSerializer(serializers.Serializer):
     segmentation = serializers.CharField(required=False)
     pass_threshold = serializers.FloatField(required=False, allow_null=True)
     clinical_angles = serializers.DictField(child=AngleRangeSerializer(), required=False)
+    clinical_notes = serializers.DictField(
+        child=serializers.CharField(), required=False,
+        help_text="angle name -> why the recording does not measure it (plain words)",
+    )  # fmt: skip
     gamma = serializers.DictField(child=serializers.FloatField(), required=False)
     range_of_motion = serializers.DictField(child=serializers.FloatField(), required=False)
     repetition_count = serializers.IntegerField(required=False)
@@ -286,3 +290,13 @@ class RecordingUploadSerializer(serializers.Serializer):
 
 class ConfirmSerializer(serializers.Serializer):
     exercise = serializers.UUIDField()
+
+
+class RecordingMoveSerializer(serializers.Serializer):
+    """What `PATCH /api/v1/recordings/{id}/` may change: the recording moves to another exercise
+    and/or patient of the clinic, and a new analysis run is queued (earlier runs are kept)."""
+
+    exercise = serializers.UUIDField(
+        required=False, help_text="an exercise of the clinic whose key poses are marked"
+    )
+    patient = serializers.UUIDField(required=False, help_text="a patient of the clinic")

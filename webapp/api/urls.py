@@ -2,8 +2,9 @@ from django.urls import path
 from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerView
 from rest_framework.permissions import IsAuthenticated
 
+from webapp.accounts import api as accounts_api
 from webapp.accounts.tokens import obtain_token
-from webapp.api import exports, views
+from webapp.api import exports, prescriptions, views
 from webapp.live.api import LiveSessionCreate
 
 urlpatterns = [
@@ -22,7 +23,7 @@ urlpatterns = [
     ),
     path(
         "v1/patients/<uuid:pk>/prescriptions/",
-        views.PatientPrescriptions.as_view(),
+        prescriptions.PatientPrescriptions.as_view(),
         name="api-patient-prescriptions",
     ),
     path(
@@ -50,6 +51,23 @@ urlpatterns = [
         name="api-recording-confirm",
     ),
     path("v1/live-sessions/", LiveSessionCreate.as_view(), name="api-live-sessions"),
+    path("v1/invitations/", accounts_api.InvitationCreate.as_view(), name="api-invitations"),
+    path("v1/users/", accounts_api.UserList.as_view(), name="api-users"),
+    path(
+        "v1/users/<uuid:pk>/deactivate/",
+        accounts_api.UserDeactivate.as_view(),
+        name="api-user-deactivate",
+    ),
+    path(
+        "v1/users/<uuid:pk>/reactivate/",
+        accounts_api.UserReactivate.as_view(),
+        name="api-user-reactivate",
+    ),
+    path(
+        "v1/users/<uuid:pk>/password-link/",
+        accounts_api.UserPasswordLink.as_view(),
+        name="api-user-password-link",
+    ),
     # The schema describes clinical endpoints: only signed-in users and token holders read it.
     path(
         "schema/",

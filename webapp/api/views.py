@@ -25,17 +25,18 @@ from webapp.api.serializers import (
     ConfirmSerializer,
     ExerciseSerializer,
     PatientSerializer,
+    RecordingMoveSerializer,
     RecordingSerializer,
     RecordingSummarySerializer,
     RecordingSummaryWithResultSerializer,
     RecordingUploadSerializer,
 )
 from webapp.api.summaries import recording_summaries
-from webapp.patients.adherence import adherence
 from webapp.patients.progress import progress_points_json
-from webapp.recordings import services
+from webapp.recordings import recovery, services
 from webapp.recordings.corrections import apply_corrections, corrections_of
-from webapp.recordings.forms import UploadForm
+from webapp.recordings.forms import MoveForm, UploadForm
+from webapp.recordings.recovery import check_analysable
 from webapp.recordings.results import result_data
 from webapp.recordings.uploads import check_skeleton, store_recording, suggest_exercise
 
@@ -164,10 +165,33 @@ class RecordingCreate(APIView):
 
 
 class RecordingDetail(generics.RetrieveAPIView):
+    """A recording with its newest run; staff move it (PATCH) or delete it (DELETE, soft)."""
+
     serializer_class = RecordingSerializer
 
     def get_object(self):
         return get_recording_for_user(self.request, self.kwargs["pk"])
+
+    def staff_recording(self, request: Request, pk):
+        if not request.user.is_staff_member:
+            get_recording_for_user(request, pk, audit=False)  # 404 before 403 for strangers
+            raise PermissionDenied("Only the clinic's therapists move or delete recordings.")
+        return get_recording_for_user(request, pk, audit=False)  # the change is the event
+
+    @extend_schema(request=RecordingMoveSerializer, responses={200: RecordingSerializer})
+    def patch(self, request: Request, pk) -> Response:
+        recording = self.staff_recording(request, pk)
+        RecordingMoveSerializer(data=request.data).is_valid(raise_exception=True)
+        form = MoveForm(request.data, recording=recording, user=request.user)
+        if not form.is_valid():
+            return Response(form.errors.get_json_data(), status=status.HTTP_400_BAD_REQUEST)
+        recovery.move_recording(request, recording, form.changes)
+        return Response(RecordingSerializer(recording).data)
+
+    @extend_schema(request=None, responses={204: None})
+    def delete(self, request: Request, pk) -> Response:
+        recovery.delete_recording(request, self.staff_recording(request, pk))
+        return Response(status=status.HTTP_204_NO_CONTENT)
 
 
 class RecordingResult(APIView):
@@ -196,34 +220,13 @@ class RecordingConfirm(APIView):
             raise ValidationError({"exercise": "Unknown exercise."}) from error
         with recording.file.open("rb") as handle:
             try:
+                check_analysable(exercise)
                 check_skeleton(read(handle.read()), exercise)
             except DjangoValidationError as error:
                 raise ValidationError({"exercise": error.messages}) from error
         services.confirm_exercise(recording, exercise)
         recording.refresh_from_db()
         return Response(RecordingSerializer(recording).data)
-
-
-class PatientPrescriptions(APIView):
-    """A patient's prescriptions with adherence (sessions done versus prescribed)."""
-
-    @extend_schema(responses={200: responses.PrescriptionsSerializer})
-    def get(self, request: Request, pk) -> Response:
-        patient = get_patient_for_user(request, pk)
-        rows = [
-            {
-                "id": str(p.pk),
-                "exercise": str(p.exercise_id),
-                "exercise_name": p.exercise.name,
-                "sessions_per_week": p.sessions_per_week,
-                "target_repetitions": p.target_repetitions,
-                "start_date": p.start_date.isoformat(),
-                "end_date": p.end_date.isoformat() if p.end_date else None,
-                "adherence": adherence(p).to_json(),
-            }
-            for p in patient.prescriptions.select_related("exercise")
-        ]
-        return Response({"patient": str(patient.pk), "prescriptions": rows})
 
 
 class RecordingCorrections(APIView):

@@ -84,6 +84,7 @@ class Period(NamedTuple):
 def clinic_runs(clinic_id: Any, patient_id: Any = None) -> QuerySet[AnalysisRun]:
     runs = AnalysisRun.objects.filter(
         recording__clinic_id=clinic_id,
+        recording__deleted_at__isnull=True,
         recording__patient__deleted_at__isnull=True,
         recording__patient__archived_at__isnull=True,
     )

@@ -16,9 +16,8 @@ from django.utils import timezone
 
 from webapp.accounts.models import User
 from webapp.accounts.permissions import visible_patients, visible_recordings
-from webapp.dashboard.attention import ADHERENCE_WINDOW_DAYS, Period, session_days
 from webapp.dashboard.precompute import read_page
-from webapp.patients.adherence import prescribed_sessions
+from webapp.patients.adherence import patient_adherence
 from webapp.patients.models import Patient, Prescription
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 
@@ -74,29 +73,26 @@ def my_patients(user: User, limit: int = MY_PATIENTS) -> list[Patient]:
     return list(ordered.only("pk", "display_name", "last_activity_at")[:limit])
 
 
-def patient_prescriptions(patient: Patient, today: datetime.date | None = None) -> list[dict]:
-    """The patient's current prescriptions with sessions done over the adherence window."""
+def patient_plan(patient: Patient, today: datetime.date | None = None) -> dict[str, Any]:
+    """The patient's current prescriptions, each with its dosage and its adherence over the last
+    four weeks (`expected`, `done`), and the patient's days with data (two queries)."""
     today = today or timezone.localdate()
-    window_start = today - datetime.timedelta(days=ADHERENCE_WINDOW_DAYS - 1)
-    prescriptions = (
+    prescriptions = list(
         Prescription.objects.filter(patient=patient, start_date__lte=today)
         .exclude(end_date__lt=today)
         .select_related("exercise")
         .order_by("exercise__name")
     )
-    done = session_days(patient.clinic_id, window_start, today, patient_id=patient.pk)
-    rows = []
-    for prescription in prescriptions:
-        start = max(prescription.start_date, window_start)
-        period = Period(start, prescription.end_date, prescription.sessions_per_week)
-        rows.append(
-            {
-                "prescription": prescription,
-                "expected": prescribed_sessions(period, today),
-                "done": done.get((patient.pk, prescription.exercise_id), 0),
-            }
-        )
-    return rows
+    found, days = patient_adherence(patient, today, prescriptions)
+    rows = [
+        {
+            "prescription": prescription,
+            "expected": figures.last_4_weeks.sessions_prescribed,
+            "done": figures.last_4_weeks.sessions_done,
+        }
+        for prescription, figures in zip(prescriptions, found, strict=True)
+    ]
+    return {"prescriptions": rows, "days_with_data": days}
 
 
 def run_json(run: AnalysisRun) -> dict[str, Any]:

@@ -45,4 +45,4 @@ def patient_context(user) -> dict:
     patient = visible_patients(user).first()
     if patient is None:
         return {"patient": None, "prescriptions": []}
-    return {"patient": patient, "prescriptions": parts.patient_prescriptions(patient)}
+    return {"patient": patient, **parts.patient_plan(patient)}

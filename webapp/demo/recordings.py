@@ -39,7 +39,8 @@ def ensure_recording(
 ) -> Recording:
     content = (root / spec.file).read_bytes()
     checksum = hashlib.sha256(content).hexdigest()
-    existing = Recording.objects.filter(patient=patient, checksum=checksum).first()
+    # A demo recording someone deleted stays deleted when the loader runs again.
+    existing = Recording.all_objects.filter(patient=patient, checksum=checksum).first()
     if existing is not None:
         return existing
     parsed = parse_upload(SimpleUploadedFile(Path(spec.file).name, content))
@@ -58,7 +59,14 @@ def ensure_prescription(patient: Patient, exercise: Exercise, weeks_ago: int) ->
     Prescription.objects.get_or_create(
         patient=patient,
         exercise=exercise,
-        defaults={"start_date": start, "sessions_per_week": 3, "target_repetitions": 10},
+        defaults={
+            "start_date": start,
+            "sessions_per_week": 3,
+            "sets": 2,
+            "target_repetitions": 10,
+            "days": "mon,wed,fri",
+            "notes": "Move slowly and stop if it hurts.",
+        },
     )
 
 

@@ -17,16 +17,18 @@ from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import render
 from django.views.decorators.http import require_POST
 
-from analysis.feedback import Grammar, GrammarError
+from analysis.feedback import GrammarError, check_names
 from analysis.landmarks import suggest_key_poses
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
 from webapp.exercises.annotate_data import (
     angle_curves,
     default_grammar_text,
     grammar_has_findings,
+    grammar_names,
     movement_order,
     plain_labels,
     tutor_pose,
+    type_names,
 )
 from webapp.exercises.forms import LandmarksForm
 from webapp.exercises.models import Exercise
@@ -114,9 +116,12 @@ def kept_type_names(posted: dict, earlier: dict, types: list[int]) -> dict[str, 
     return names
 
 
-def grammar_verdict(text: str) -> dict:
+def grammar_verdict(text: str, exercise: Exercise) -> dict:
+    """Whether the grammar parses and names only the exercise's body parts (as the grammar
+    writes them) and key-pose types; else the first problem with its line and column."""
+    written = grammar_names(tuple(exercise.tutor_motion().skeleton.names))
     try:
-        rules = Grammar.parse(text).rules
+        rules = check_names(text, sorted(set(written.values())), type_names(exercise))
     except GrammarError as error:
         return {
             "valid": False,
@@ -140,7 +145,7 @@ def check_grammar(request: HttpRequest, pk) -> JsonResponse:
         return JsonResponse({"detail": 'Send JSON {"text": "..."}.'}, status=400)
     if not isinstance(text, str):
         return JsonResponse({"detail": "text must be a string."}, status=400)
-    verdict = grammar_verdict(text)
+    verdict = grammar_verdict(text, exercise)
     if verdict["valid"] and body.get("save"):
         Exercise.objects.filter(pk=exercise.pk).update(feedback_grammar=text)
         verdict["saved"] = True

@@ -24,7 +24,7 @@ LIVE_SESSION_CREATED = inline_serializer(
 
 
 class LiveSessionCreate(APIView):
-    """Open a live session; stream frames to its WebSocket (see `analysis.online.session`)."""
+    """Open a live session; stream frames to its WebSocket (see `analysis.live.session`)."""
 
     @extend_schema(
         request=LiveSessionRequest,

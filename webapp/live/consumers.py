@@ -2,7 +2,7 @@
 
 A capture client (API token) or a browser (signed-in session) of the session's clinic connects;
 anyone else is refused before the handshake completes. Every connection joins the session's
-group: what one connection sends (frames, see `analysis.online.session`) is answered to it
+group: what one connection sends (frames, see `analysis.live.session`) is answered to it
 directly and shown to the others (the live page), position events with both skeletons' poses.
 A replay session streams its stored recording from the server through the same path.
 
@@ -15,7 +15,7 @@ the same session in this process (`CONNECTIONS`), or one in another process that
 through the channel layer. A capture client alone costs no channel-layer traffic (with Redis,
 a round trip per event), which is most of what a server spends per frame besides the aligner.
 
-A batch of frames (``{"type": "frames", ...}``, `analysis.online.session`) is answered with one
+A batch of frames (``{"type": "frames", ...}``, `analysis.live.session`) is answered with one
 message, a JSON array of its events (none when it has none): the per-message cost of Daphne and
 Channels, most of a frame's cost, is paid once per batch. JSON is read and written with orjson
 when it is installed (a few times faster than the standard library on frames of numbers).
@@ -34,8 +34,8 @@ from channels.generic.websocket import AsyncWebsocketConsumer
 from django.conf import settings
 
 from analysis.bvh import AnalysisInputError
-from analysis.online.session import LiveSession as SessionState
-from analysis.online.stream import header_text
+from analysis.live import LiveSession as SessionState
+from analysis.live import header_text
 from webapp.live import services
 from webapp.live.auth import scope_user
 from webapp.live.models import LiveSession, LiveStatus

@@ -11,7 +11,7 @@ from django.db.models import QuerySet
 from django.utils import timezone
 
 from analysis.bvh import Motion, read
-from analysis.online.live import rehearse
+from analysis.live import rehearse
 from analysis.pipeline import FittedModel
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise

@@ -6,6 +6,7 @@ import uuid
 from datetime import timedelta
 
 from django.conf import settings
+from django.core.validators import MaxValueValidator, MinValueValidator
 from django.db import models, transaction
 from django.utils import timezone
 
@@ -71,6 +72,11 @@ class Patient(models.Model):
     archived_at = models.DateTimeField(null=True, blank=True)
     last_activity_at = models.DateTimeField(null=True, blank=True, db_index=True)
     deleted_at = models.DateTimeField(null=True, blank=True, db_index=True)
+    # Reminders of missed sessions (webapp.patients.reminders): off unless the therapist turns
+    # them on; sent to `email`, or to the patient's account's address when it is empty.
+    send_reminders = models.BooleanField(default=False)
+    email = models.EmailField(blank=True)
+    last_reminder_on = models.DateField(null=True, blank=True)
 
     objects = LivePatientManager()
     all_objects = PatientQuerySet.as_manager()
@@ -93,14 +99,45 @@ class Patient(models.Model):
         return super().delete()
 
 
+WEEKDAYS = ("mon", "tue", "wed", "thu", "fri", "sat", "sun")  # date.weekday() order
+# Lowest and highest value of each part of a dosage (a session is a day: seven a week at most).
+DOSAGE_LIMITS = {
+    "sessions_per_week": (1, 7),
+    "sets": (1, 20),
+    "target_repetitions": (1, 200),
+    "hold_seconds": (0, 600),
+}
+
+
+def dosage_field(
+    low: int, high: int, default: int | None = None
+) -> models.PositiveSmallIntegerField:
+    validators = [MinValueValidator(low), MaxValueValidator(high)]
+    return models.PositiveSmallIntegerField(
+        null=True, blank=True, default=default, validators=validators
+    )
+
+
 class Prescription(models.Model):
+    """An exercise prescribed to a patient, with its dosage (every part optional).
+
+    A session is a day with at least one recording of the exercise (webapp.patients.adherence),
+    so a week holds at most seven. `days` lists the weekdays the therapist suggests
+    ("mon,wed,fri"); the prescription form and the API set `sessions_per_week` to their number
+    when it is left empty.
+    """
+
     id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
     patient = models.ForeignKey(Patient, on_delete=models.CASCADE, related_name="prescriptions")
     exercise = models.ForeignKey(
         "exercises.Exercise", on_delete=models.PROTECT, related_name="prescriptions"
     )
-    sessions_per_week = models.PositiveSmallIntegerField(default=3)
-    target_repetitions = models.PositiveSmallIntegerField(default=10)
+    sessions_per_week = dosage_field(*DOSAGE_LIMITS["sessions_per_week"], default=3)
+    sets = dosage_field(*DOSAGE_LIMITS["sets"])
+    # Per set; `repetitions` in the API (the column keeps its name for older backups).
+    target_repetitions = dosage_field(*DOSAGE_LIMITS["target_repetitions"], default=10)
+    hold_seconds = dosage_field(*DOSAGE_LIMITS["hold_seconds"])
+    days = models.CharField(max_length=27, blank=True)
     start_date = models.DateField()
     end_date = models.DateField(null=True, blank=True)
     notes = models.TextField(blank=True)
@@ -108,6 +145,18 @@ class Prescription(models.Model):
 
     class Meta:
         ordering = ["-start_date"]
+
+    @property
+    def weekdays(self) -> list[int]:
+        """The suggested days as `date.weekday()` numbers (Monday 0)."""
+        return [WEEKDAYS.index(d) for d in self.days.split(",") if d in WEEKDAYS]
+
+    @property
+    def dosage(self) -> str:
+        """The dosage in words ("3 sets of 10 repetitions, 3 sessions a week")."""
+        from webapp.patients.dosage import dosage_words
+
+        return dosage_words(self)
 
 
 class PerformanceLevel(models.Model):

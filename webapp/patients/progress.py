@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from django.db.models import Case, F, TextField, When
+from django.db.models import Case, F, Q, TextField, When
 
 from analysis.clinical.labels import REGIONS, angle_label, region_of
 from webapp.api.numbers import utc_iso
@@ -50,9 +50,16 @@ def latest_runs(
     a succeeded run, by its newest succeeded run, ordered by upload. `text`: "page" (as
     `patient_progress` returns points), "api" (rounded), "clinical" (page, clinical points only).
     """
-    runs = AnalysisRun.objects.filter(
-        recording__patient=patient, status=RunStatus.SUCCEEDED
-    ).order_by("recording__uploaded_at", "created_at")
+    runs = (
+        AnalysisRun.objects.filter(
+            recording__patient=patient,
+            recording__deleted_at__isnull=True,
+            status=RunStatus.SUCCEEDED,
+        )
+        # A recording moved to another exercise counts only by the runs of its new exercise.
+        .filter(Q(model__isnull=True) | Q(model__exercise_id=F("recording__exercise_id")))
+        .order_by("recording__uploaded_at", "created_at")
+    )
     if exercise_id:
         runs = runs.filter(recording__exercise_id=exercise_id)
     if since:

@@ -9,8 +9,10 @@ from django.shortcuts import redirect, render
 from django.utils import timezone
 from django.views.decorators.http import require_POST
 
+from webapp.accounts.invitations import may_invite
+from webapp.accounts.models import Role
 from webapp.accounts.permissions import get_patient_for_user, require_staff, visible_patients
-from webapp.patients.adherence import adherence
+from webapp.patients.adherence import DaysWithData, patient_adherence
 from webapp.patients.forms import PatientForm, PrescriptionForm
 from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun
@@ -33,21 +35,26 @@ def patient_list(request: HttpRequest) -> HttpResponse:
     return render(request, "patients/list.html", context)
 
 
-def with_adherence(patient: Patient) -> list:
+def with_adherence(patient: Patient) -> tuple[list, DaysWithData]:
+    """The patient's prescriptions, each with its `adherence`, and their days with data."""
     prescriptions = list(patient.prescriptions.select_related("exercise"))
-    for prescription in prescriptions:
-        prescription.adherence = adherence(prescription)
-    return prescriptions
+    found, days = patient_adherence(patient, prescriptions=prescriptions)
+    for prescription, figures in zip(prescriptions, found, strict=True):
+        prescription.adherence = figures
+    return prescriptions, days
 
 
 @login_required
 def patient_detail(request: HttpRequest, pk) -> HttpResponse:
     patient = get_patient_for_user(request, pk)
+    prescriptions, days = with_adherence(patient)
     context = {
         "patient": patient,
-        "prescriptions": with_adherence(patient),
+        "prescriptions": prescriptions,
+        "days_with_data": days,
         "recordings": recordings_page(patient, request.GET.get("recordings_page")),
         "levels": patient.levels.select_related("exercise").order_by("exercise__name", "joint"),
+        "can_invite": patient.user_id is None and may_invite(request.user, Role.PATIENT, patient),
     }
     return render(request, "patients/detail.html", context)
 

@@ -1,15 +1,17 @@
 """Clinical measures of one analysed recording, as the recording page and the reports show them.
 
 Plain words and degrees only (``analysis.clinical.labels``): each angle's min, max and range
-beside the normal adult range, grouped by body region with the regions the exercise moves first;
-per repetition the range of the angles the exercise moves; and each hand's reachable workspace.
+beside the normal adult range (values outside it flagged), grouped by body region with the
+regions the exercise moves first, and the angles the recording could not measure with the reason;
+left and right ranges side by side; per repetition the range of the angles the exercise moves;
+and each hand's reachable workspace.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from analysis.clinical.labels import QUADRANT_LABELS, angle_groups, angle_label
+from analysis.clinical.labels import QUADRANT_LABELS, angle_groups, angle_label, symmetry_rows
 from analysis.pipeline.results import AnalysisSummary
 
 SIDE_LABELS = {"left": "Left hand", "right": "Right hand"}
@@ -23,7 +25,7 @@ def involved_joints(exercise) -> list[str]:
 def clinical_groups(result: AnalysisSummary | None, exercise=None) -> list[dict[str, Any]]:
     if result is None:
         return []
-    return angle_groups(result.clinical_angles, involved_joints(exercise))
+    return angle_groups(result.clinical_angles, involved_joints(exercise), result.clinical_notes)
 
 
 def _per_repetition_names(groups: list[dict[str, Any]]) -> list[str]:
@@ -85,6 +87,7 @@ def clinical_context(result: AnalysisSummary | None, exercise=None) -> dict[str,
     groups = clinical_groups(result, exercise)
     return {
         "groups": groups,
+        "symmetry": symmetry_rows(result.clinical_angles) if result is not None else [],
         "per_repetition": repetition_table(result, groups),
         "workspace": workspace_rows(result),
         "hulls": workspace_hulls(result),

@@ -9,6 +9,8 @@ from webapp.accounts.models import User
 from webapp.accounts.permissions import visible_exercises, visible_patients
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
+from webapp.recordings.models import Recording
+from webapp.recordings.recovery import analysable, check_analysable, check_move
 from webapp.recordings.uploads import (
     ParsedUpload,
     check_not_duplicate,
@@ -50,6 +52,12 @@ class UploadForm(forms.Form):
             )
         self.parsed: ParsedUpload | None = None
 
+    def clean_exercise(self):
+        exercise = self.cleaned_data["exercise"]
+        if exercise is not None:
+            check_analysable(exercise)  # the API offers every exercise; say why not this one
+        return exercise
+
     def clean_file(self):
         upload = self.cleaned_data["file"]
         self.parsed = parse_upload(upload)
@@ -80,7 +88,7 @@ def upload_choices(user: User) -> dict[str, Any]:
     active exercise; a patient uploads for themselves only, one of the exercises prescribed to
     them (`own_patient`)."""
     patients = visible_patients(user).filter(archived_at__isnull=True)
-    exercises = visible_exercises(user).filter(archived_at__isnull=True)
+    exercises = analysable(visible_exercises(user))  # none without key poses: not analysable
     if not user.is_patient:
         return {"patients": patients, "exercises": exercises}
     own = patients.first()
@@ -88,3 +96,42 @@ def upload_choices(user: User) -> dict[str, Any]:
         return {"patients": patients, "exercises": exercises.none(), "own_patient": None}
     prescribed = exercises.filter(prescriptions__patient=own).distinct()
     return {"patients": patients, "exercises": prescribed, "own_patient": own}
+
+
+class MoveForm(forms.Form):
+    """Move a recording to another exercise and/or patient of the clinic (the page and the API)."""
+
+    exercise = forms.ModelChoiceField(
+        queryset=Exercise.objects.none(),
+        required=False,
+        error_messages={"invalid_choice": "Unknown exercise: not one of the clinic's exercises."},
+    )
+    patient = forms.ModelChoiceField(
+        queryset=Patient.objects.none(),
+        required=False,
+        error_messages={"invalid_choice": "Unknown patient: not one of the clinic's patients."},
+    )
+
+    def __init__(self, *args, recording: Recording, user: User, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.recording = recording
+        self.fields["exercise"].queryset = visible_exercises(user).filter(archived_at__isnull=True)
+        self.fields["patient"].queryset = visible_patients(user).filter(archived_at__isnull=True)
+        self.changes: dict[str, Any] = {}
+
+    def offer_analysable_only(self) -> MoveForm:
+        """The page lists only exercises a recording can be analysed against (the API answers
+        why another one cannot be chosen)."""
+        field = self.fields["exercise"]
+        field.queryset = analysable(field.queryset)
+        return self
+
+    def clean(self):
+        cleaned = super().clean()
+        if self.errors:
+            return cleaned
+        exercise, patient = cleaned.get("exercise"), cleaned.get("patient")
+        if exercise is None and patient is None:
+            raise ValidationError("Choose the exercise or the patient to move the recording to.")
+        self.changes = check_move(self.recording, exercise, patient)  # empty: nothing to do
+        return cleaned

@@ -25,10 +25,13 @@ if TYPE_CHECKING:
 
 
 class LiveRecordingManager(models.Manager):
-    """The default manager hides the recordings of soft-deleted patients, like the patients."""
+    """The default manager hides deleted recordings and the recordings of soft-deleted patients,
+    like the patients (`all_objects` sees every row: backups, the purge, restoring)."""
 
     def get_queryset(self):
-        return super().get_queryset().filter(patient__deleted_at__isnull=True)
+        return (
+            super().get_queryset().filter(deleted_at__isnull=True, patient__deleted_at__isnull=True)
+        )
 
 
 class Recording(models.Model):
@@ -66,6 +69,16 @@ class Recording(models.Model):
     # Set when the stored file no longer matches `checksum` (or is missing) on a read.
     damaged_at = models.DateTimeField(null=True, blank=True)
     damage = models.CharField(max_length=300, blank=True)
+    # Set when staff delete the recording (webapp.recordings.recovery): hidden from every page,
+    # list, export and the API until a clinic admin restores it.
+    deleted_at = models.DateTimeField(null=True, blank=True, db_index=True)
+    deleted_by = models.ForeignKey(
+        settings.AUTH_USER_MODEL,
+        on_delete=models.SET_NULL,
+        null=True,
+        blank=True,
+        related_name="+",
+    )
 
     objects = LiveRecordingManager()
     all_objects = models.Manager()

@@ -40,6 +40,7 @@ def metrics(result: AnalysisSummary) -> dict[str, Any]:
         "frames": result.frames,
         "fps": result.fps,
         "mirrored": result.mirrored,
+        "match": result.match.to_json(),
     }
 
 

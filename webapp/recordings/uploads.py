@@ -19,7 +19,17 @@ from django.db import transaction
 from django.db.models import Q
 from django.utils import timezone
 
-from analysis.bvh import AnalysisInputError, BVHError, Motion, SkeletonMismatchError, map_onto, read
+from analysis.bvh import (
+    AnalysisInputError,
+    BVHError,
+    ImplausibleRecordingError,
+    Limits,
+    Motion,
+    SkeletonMismatchError,
+    check_recording,
+    read,
+)
+from analysis.kinematics import map_onto
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
@@ -85,13 +95,29 @@ def parse_upload(upload: UploadedFile) -> ParsedUpload:
         raise ValidationError(
             f"The recording has {motion.frames.shape[0]} frames; at least {MIN_FRAMES} are needed."
         )
+    check_plausible(motion)
     return ParsedUpload(content, hashlib.sha256(content).hexdigest(), motion, name)
+
+
+def check_plausible(motion: Motion, exercise: Exercise | None = None) -> None:
+    """The one plausibility check every analysis runs (`analysis.bvh.check_recording`: frame
+    time, length, values, memory), with this site's limits; with the exercise, its model's frame
+    rate and joints give the memory estimate."""
+    fps, joints = None, None
+    if exercise is not None:
+        tutor = exercise.tutor_motion()
+        fps, joints = tutor.fps, len(tutor.skeleton.names)
+    try:
+        check_recording(motion, fps, joints, Limits.from_settings(settings))
+    except ImplausibleRecordingError as error:
+        raise ValidationError(str(error)) from error
 
 
 def check_skeleton(motion: Motion, exercise: Exercise) -> None:
     """The recording must map onto the exercise tutor's skeleton: the same rig, or another rig
-    whose body parts are recognised (`analysis.bvh.map_onto`, as the analysis itself does; a few
-    frames suffice to check, the analysis maps them all)."""
+    whose body parts are recognised (`analysis.kinematics.map_onto`, as the analysis itself does;
+    a few frames suffice to check, the analysis maps them all)."""
+    check_plausible(motion, exercise)
     tutor = exercise.tutor_motion()
     try:
         map_onto(motion.with_frames(motion.frames[:CHECK_FRAMES]), tutor.skeleton)

@@ -1,6 +1,6 @@
 from django.urls import path
 
-from webapp.recordings import views
+from webapp.recordings import recovery_views, views
 
 app_name = "recordings"
 
@@ -12,4 +12,8 @@ urlpatterns = [
     path("<uuid:pk>/result.json", views.result, name="result"),
     path("<uuid:pk>/confirm/", views.confirm, name="confirm"),
     path("<uuid:pk>/corrections/", views.corrections, name="corrections"),
+    path("<uuid:pk>/move/", recovery_views.move, name="move"),
+    path("<uuid:pk>/delete/", recovery_views.delete, name="delete"),
+    path("<uuid:pk>/restore/", recovery_views.restore, name="restore"),
+    path("deleted/", recovery_views.deleted, name="deleted"),
 ]

@@ -17,10 +17,11 @@ from webapp.accounts.permissions import (
     require_staff,
     visible_exercises,
 )
-from webapp.recordings import services, warmup
+from webapp.recordings import recovery_views, services, warmup
 from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import UploadForm, upload_choices
 from webapp.recordings.models import AnalysisRun
+from webapp.recordings.recovery import analysable
 from webapp.recordings.results import result_data
 from webapp.recordings.storage import DamagedRecordingError, read_verified
 from webapp.recordings.uploads import check_skeleton, store_recording, suggest_exercise
@@ -65,6 +66,8 @@ def detail(request: HttpRequest, pk) -> HttpResponse:
     recording = get_recording_for_user(request, pk)
     runs = list(recording.runs.all())
     context = {"recording": recording, "run": runs[0] if runs else None, "runs": runs}
+    if request.user.is_staff_member:
+        context["move_form"] = recovery_views.move_form(request, recording)
     return render(request, "recordings/detail.html", context)
 
 
@@ -132,7 +135,7 @@ def confirm(request: HttpRequest, pk) -> HttpResponse:
     recording = get_recording_for_user(request, pk)
     if recording.exercise_id is not None:
         return redirect("recordings:detail", pk=recording.pk)
-    exercises = visible_exercises(request.user).filter(archived_at__isnull=True)
+    exercises = analysable(visible_exercises(request.user))
     initial = {"exercise": recording.suggested_exercise_id}
     form = ConfirmForm(
         request.POST or None, initial=initial, recording=recording, exercises=exercises

@@ -77,6 +77,8 @@ def recording_content(recording) -> dict[str, Any]:
     content["score"] = fmt(result.score)
     content.update(repetition_content(run, recording))
     content["feedback"] = [comment.text for comment in result.feedback]
+    if not result.match.fits:  # no score and no repetition: say why instead
+        content["feedback"] = [result.match.message, *(c.text for c in result.advice.corrections)]
     content.update(clinical_content(result, recording.exercise))
     content["rom"] = [
         [body_part(joint).capitalize(), fmt(value, 1), fmt(result.gamma.get(joint), 2)]

@@ -157,8 +157,10 @@ def timeline(
         "ticks": ticks(scale),
         "threshold": round(result.pass_threshold),
         "repetitions": repetitions(result, scale, list(raw.get("repetitions") or [])),
-        # Older runs stored no segmentation: only an explicit "fallback" earns the note.
+        # Older runs stored no segmentation: only an explicit "fallback" earns the note; a
+        # recording that does not show the exercise has no repetition to explain.
         "fallback": raw.get("segmentation", result.segmentation if stored is None else "")
-        == "fallback",
+        == "fallback"
+        and result.match.fits,
         "fallback_note": FALLBACK_NOTE,
     }

@@ -12,6 +12,7 @@ from django.http import FileResponse, HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import render
 
 from webapp.accounts.permissions import get_patient_for_user, get_recording_for_user
+from webapp.patients.adherence import patient_adherence
 from webapp.reports import content, playback, services
 
 NOT_READY = "This recording has no playback data yet (the analysis has not succeeded)."
@@ -91,6 +92,7 @@ def period(request: HttpRequest):
 @login_required
 def progress_page(request: HttpRequest, pk) -> HttpResponse:
     patient = get_patient_for_user(request, pk)
+    prescribed = list(patient.prescriptions.select_related("exercise"))
     prescriptions = [
         {
             "exercise": p.exercise.name,
@@ -99,9 +101,15 @@ def progress_page(request: HttpRequest, pk) -> HttpResponse:
             "start": p.start_date.isoformat(),
             "end": p.end_date.isoformat() if p.end_date else None,
         }
-        for p in patient.prescriptions.select_related("exercise")
+        for p in prescribed
     ]
-    context = {"patient": patient, "prescriptions": prescriptions}
+    adherence, days = patient_adherence(patient, prescriptions=prescribed)
+    context = {
+        "patient": patient,
+        "prescriptions": prescriptions,
+        "adherence": adherence,
+        "days_with_data": days,
+    }
     return render(request, "reports/progress.html", context)
 
 

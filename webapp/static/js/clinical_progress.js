@@ -5,7 +5,7 @@
   const data = document.getElementById("clinical-progress-data");
   if (!data || !window.Plotly) return;
   const exercises = JSON.parse(data.textContent);
-  const config = { displaylogo: false, responsive: true };
+  const config = window.chartConfig();
   // Plotly 3 reads axis titles only as { text }: a bare string leaves the axis without its unit.
   const layout = (title, extra = {}) => ({ margin: { t: 10, r: 10, b: 40, l: 55 }, yaxis: { title: { text: title }, rangemode: "tozero" }, legend: { orientation: "h" }, ...extra });
   const moving = (values) => Math.max(0, ...values.filter((v) => v !== null)) >= 10;

@@ -37,14 +37,17 @@ function say(text) {
 }
 
 function repetition(event) {
+  // the server's words: praise only for a passed repetition, a failed one is told why
   const tips = event.guidance.map((g) => g.type).join(", ") || "–";
+  const verdict = event.passed ? "passed" : "not passed";
   const tr = document.createElement("tr");
   tr.innerHTML = `<td>${event.index + 1}</td><td>${event.start}–${event.end}</td>` +
-    `<td>${event.score.toFixed(1)}</td><td>${tips}</td><td class="offline">…</td>`;
+    `<td>${event.score.toFixed(1)} (${verdict})</td><td>${tips}</td><td class="offline">…</td>`;
+  tr.dataset.words = event.words; // what was said, for this repetition
   $("reps").append(tr);
   rows.set(event.index, tr);
   $("rep-count").textContent = event.index + 1;
-  say(event.guidance.length ? event.guidance[0].text : `Repetition ${event.index + 1}: well done.`);
+  say(event.words);
 }
 
 function position(event) {

@@ -7,7 +7,7 @@
   const { points: all, labels = {} } = await fetch(box.dataset.url).then((r) => r.json());
   const prescriptions = JSON.parse(document.getElementById("prescriptions").textContent);
   if (!all.length) { document.getElementById("progress-empty").hidden = false; box.dataset.ready = "1"; return; }
-  const config = { displaylogo: false, responsive: true };
+  const config = window.chartConfig();
   const layout = (title, extra = {}) => ({ margin: { t: 10, r: 10, b: 40, l: 60 }, xaxis: { title: { text: "date" } }, yaxis: { title: { text: title } }, legend: { orientation: "h" }, ...extra });
   const select = document.getElementById("exercise-filter");
   [...new Set(all.map((p) => p.exercise_name || "?"))].forEach((name) => select.add(new Option(name, name)));
@@ -52,7 +52,7 @@
     Plotly.react("chart-rom", perJoint(points, "range_of_motion", several), layout("range of motion (degrees)"), config);
     Plotly.react("chart-gamma", perJoint(points, "gamma", several), layout("level (0–1)", { yaxis: { title: { text: "level (0–1)" }, range: [0, 1.05] } }), config);
     const reps = [{ type: "bar", x: dates, y: points.map((p) => p.repetitions), name: "repetitions", marker: { color: "#1f6feb" } }];
-    const targets = prescriptions.filter((p) => !chosen || p.exercise === chosen).map((p) => ({
+    const targets = prescriptions.filter((p) => p.target_repetitions != null && (!chosen || p.exercise === chosen)).map((p) => ({
       x: [p.start, p.end || new Date().toISOString().slice(0, 10)], y: [p.target_repetitions, p.target_repetitions],
       name: `target · ${p.exercise}`, mode: "lines", line: { dash: "dash" },
     }));

@@ -122,10 +122,10 @@ function charts(playback) {
   const marks = meta.landmarks.map((m) => ({ type: "line", xref: "x", yref: "paper", x0: seconds(m.frame), x1: seconds(m.frame), y0: 0, y1: 1, line: { color: "#bbb", width: 1, dash: "dot" } }));
   const layout = { margin: { t: 10, r: 10, b: 40, l: 45 }, xaxis: { title: { text: "time (s)" } }, yaxis: { title: { text: "angle (°)" } }, shapes: marks, legend: { orientation: "h" } };
   const chart = $("chart-angles");
-  Plotly.newPlot(chart, traces, layout, { displaylogo: false, responsive: true });
+  Plotly.newPlot(chart, traces, layout, window.chartConfig());
   chart.on("plotly_click", (e) => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(e.points[0].x * meta.fps); });
   const reps = meta.repetitions;
-  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => (r.guidance || []).map((g) => guidanceWords(g.type)).join(", ")), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 40, l: 50 }, xaxis: { title: { text: "repetition (number)" }, type: "category" }, yaxis: { range: [0, 100], title: { text: "score (0–100)" } } }, { displaylogo: false, responsive: true });
+  Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => (r.guidance || []).map((g) => guidanceWords(g.type)).join(", ")), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 40, l: 50 }, xaxis: { title: { text: "repetition (number)" }, type: "category" }, yaxis: { range: [0, 100], title: { text: "score (0–100)" } } }, window.chartConfig());
   // The time cursor is a positioned overlay, not a Plotly shape: relayout is too slow to run
   // at the animation rate.
   const cursor = document.createElement("div");

@@ -11,5 +11,5 @@
     margin: { t: 10, r: 10, b: 90, l: 60 },
     xaxis: { title: { text: "body part" }, automargin: true },
     yaxis: { title: { text: "weight (relative)" }, rangemode: "tozero" },
-  }, { displaylogo: false, responsive: true });
+  }, window.chartConfig());
 })();

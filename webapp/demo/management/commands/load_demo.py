@@ -11,11 +11,15 @@ class Command(BaseCommand):
         parser.add_argument(
             "--allow-production",
             action="store_true",
-            help="Load even with DEBUG off (the demo accounts have published passwords).",
+            help="Load even where DEMO_ALLOWED is off (the demo accounts have published "
+            "passwords).",
         )
 
     def handle(self, *args, **options):
         if not settings.DEMO_ALLOWED and not options["allow_production"]:
-            raise CommandError("Refusing to create demo accounts: DEMO_ALLOWED is off (DEBUG off).")
+            raise CommandError(
+                "Refusing to create demo accounts (their passwords are published): set "
+                "DEMO_ALLOWED=1 on a machine meant for trying the site (`make demo` does)."
+            )
         clinic = load_demo_clinic()
         self.stdout.write(self.style.SUCCESS(f"Demo clinic ready: {clinic.name}"))

@@ -1,5 +1,8 @@
 """Frame sources of the capture client: a BVH file paced in real time, or a TCP stream of BVH
-frame lines (Perception Neuron's software broadcasts one); and how events are printed."""
+frame lines (Perception Neuron's software broadcasts one); and how events are printed.
+
+`header_text` (what a live session's 'start' carries) is the session protocol's
+(`analysis.live.session`), re-exported here for the client's callers."""
 
 from __future__ import annotations
 
@@ -14,8 +17,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from analysis.bvh import Motion, dumps, read
-from analysis.online.live import Event
+from analysis.bvh import read
+from analysis.live import Event, header_text
 
 FloatArray = npt.NDArray[np.float64]
 MAX_LINE_BYTES = 1 << 20
@@ -32,11 +35,6 @@ class Source:
     header: str
     frame_time: float
     frames: Iterator[FloatArray]
-
-
-def header_text(motion: Motion) -> str:
-    """The BVH text of the skeleton with no frames (what a live session's 'start' carries)."""
-    return dumps(motion.with_frames(np.zeros((0, motion.skeleton.n_channels))))
 
 
 def paced(frames: FloatArray, frame_time: float, speed: float | None) -> Iterator[FloatArray]:

@@ -32,6 +32,8 @@ import numpy.typing as npt
 
 from analysis.bvh import rigs
 from analysis.bvh.io import Motion, Skeleton
+from analysis.kinematics import quaternions as quat
+from analysis.kinematics.forward_kinematics import world
 
 FloatArray = npt.NDArray[np.float64]
 _AXES = np.eye(3)
@@ -116,8 +118,6 @@ def snapped_axis(v: FloatArray) -> FloatArray:
 
 class _Retarget:
     def __init__(self, motion: Motion, target: Skeleton, pairs: dict[str, tuple[int, int]]):
-        from analysis.kinematics.forward_kinematics import world
-
         self.motion, self.target = motion, target
         self.source = motion.skeleton
         self.match = {t: s for t, s in pairs.values()}  # target joint → source point
@@ -316,8 +316,6 @@ class _Retarget:
         offsets: FloatArray,
         scale: float,
     ) -> Motion:
-        from analysis.kinematics import quaternions as quat
-
         target = self.target
         n_frames = world_rot.shape[0]
         frames = np.zeros((n_frames, target.n_channels))
@@ -356,12 +354,8 @@ def _spread(u: FloatArray) -> bool:
 
 
 def _matrices(q: FloatArray) -> FloatArray:
-    from analysis.kinematics import quaternions as quat
-
     return quat.to_matrix(q)
 
 
 def _rotate(q: FloatArray, v: FloatArray) -> FloatArray:
-    from analysis.kinematics import quaternions as quat
-
     return quat.rotate(q, v)

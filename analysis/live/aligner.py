@@ -14,7 +14,8 @@ Per frame (O(m) work, m the tutor repetition's length):
   Table 1's guidance, ``gesture_guidance``), scored by the exercise model's scorer and given
   the guidance the offline pipeline gives (``guidance``: Table 1 on the repetition's WOOE-DTW
   alignment with a tutor repetition, `analysis.pipeline.gestures`), so a patient hears live
-  what the recording's page later says.
+  what the recording's page later says. ``passed``: its score reached the model's pass mark;
+  ``words``: what the page shows and speaks (`repetition_words`: praise only when passed).
 
 Frames are the recording's own BVH channel values; joints are mapped onto the model's once, and
 a stream faster than the model's frame rate is thinned to it (slower streams are used as is).
@@ -39,7 +40,14 @@ from analysis.online.aligners import ForwardPlotAligner, ForwardPlotOptions, Ope
 from analysis.online.counting import Counted, RepetitionCounter
 from analysis.online.frames import FrameKinematics
 from analysis.online.gbdtw import GBDTWOptions, _gesture
-from analysis.pipeline.gestures import align_gesture, guidance
+from analysis.pipeline.gestures import (
+    Pace,
+    align_gesture,
+    guidance,
+    reference_excursion,
+    repetition_pace,
+    usual_pace,
+)
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import mirrored
 from analysis.pipeline.repetition_stage import RULES
@@ -58,10 +66,12 @@ GUIDANCE_TEXT = {
 @dataclass(frozen=True)
 class LiveOptions:
     """relative_error: GB-DTW's delta (001: 5 %); window_share: FP-C window as a share of the
-    tutor repetition (003: a third of the cycle)."""
+    tutor repetition (003: a third of the cycle); own_pace: the patient's usual pace from earlier
+    sessions (None: the session's repetitions so far), as offline."""
 
     relative_error: float = 0.05
     window_share: float = 1.0 / 3.0
+    own_pace: Pace | None = None
 
 
 class LiveAligner:
@@ -96,7 +106,10 @@ class LiveAligner:
         self._progress: tuple[list[float], list[float]] = ([], [])  # as performed, mirrored
         self._q: tuple[list[FloatArray], list[FloatArray]] = ([], [])
         self._gesture_q: list[FloatArray] = []  # (J, 4) per model-rate frame, for guidance
+        self._gesture_mirror_q: list[FloatArray] = []  # their mirror image's joints
         self._gesture_joints = list(model.components.papers.joint_index)
+        self._gesture_mirror = [model.components.mirror[j] for j in self._gesture_joints]
+        self._paces: list[Pace] = []  # the repetitions' so far (the patient's own pace)
         # repetitions are counted on the side the patient uses (mirror image: side 1)
         self._counter = RepetitionCounter(model.components.axis.rep_frames)
         self._side = 0
@@ -120,6 +133,10 @@ class LiveAligner:
         self._tutor_q = quat.make_continuous(q).reshape(b - a + 1, -1)
         weights = getattr(parts, "joint_weights", None)
         self._weights = None if weights is None else tuple(np.asarray(weights)[self._joints])
+        reps, papers = parts.tutor_reps or [(a, b)], parts.papers
+        mirror_q = tutor[:, [parts.mirror[j] for j in papers.joint_index]]
+        self._reference = reference_excursion(papers.tutor_q, mirror_q, reps, parts.scoring_step)
+        self._reference_frames = float(np.median([e - s + 1 for s, e in reps]))
 
     def _setup_aligners(self) -> None:
         m = self._tutor_q.shape[0]
@@ -245,6 +262,7 @@ class LiveAligner:
             self._span[side] = (min(low, value), max(high, value))
         # the rotations offline guidance aligns: as performed, whichever side is used
         self._gesture_q.append(rot[0, self._index][self._gesture_joints])
+        self._gesture_mirror_q.append(rot[0, self._index][self._gesture_mirror])
         direct, flipped = self._joint_quaternions(rot)
         self._q[0].append(direct[0])
         self._q[1].append(flipped[0])
@@ -287,35 +305,42 @@ class LiveAligner:
         user = np.asarray(self._q[side][a : b + 1])
         gesture = _gesture(self._tutor_q, user, user, index=len(self.repetitions), a0=0, u0=a,
                            opt=self._gb)  # fmt: skip
+        score = round(self._score(a, b, side), 2)
+        threshold = float(self.model.components.papers.threshold.value)
+        tips = self._guidance(a, b, len(self.repetitions))
         event = {
             "event": "repetition",
             "index": len(self.repetitions),
             "start": start,
             "end": end,
-            "score": round(self._score(a, b, side), 2),
-            "guidance": self._guidance(a, b, side, len(self.repetitions)),
+            "score": score,
+            "passed": bool(score >= threshold),
+            "guidance": tips,
             "gesture_guidance": list(gesture.guidance),
             "reach": round(reach, 3),
             "tempo": round(tempo, 3),
         }
+        event["words"] = repetition_words(event, threshold)
         self.repetitions.append(event)
         return event
 
-    def _guidance(self, a: int, b: int, side: int, index: int) -> list[Event]:
+    def _guidance(self, a: int, b: int, index: int) -> list[Event]:
         """Table 1's guidance for model-rate frames a..b, by the offline pipeline's own rule
         (`analysis.pipeline.gestures.guidance` on the repetition's WOOE-DTW alignment with a
-        tutor repetition), most pressing first, with the stream frames it concerns."""
+        tutor repetition, its tempo and reach against the reference's and the patient's own),
+        most pressing first, with the stream frames it concerns."""
         parts = self.model.components
         papers, step = parts.papers, parts.scoring_step
         reps = parts.tutor_reps or [(self.tutor_start, self.tutor_end)]
         t0, t1 = reps[index % len(reps)]  # offline's choice when no key pose pairs them
         patient_q = np.asarray(self._gesture_q[a : b + 1 : step])
         aligned = align_gesture(papers.tutor_q[t0 : t1 + 1 : step], patient_q, papers.joint_weights)
-        tutor_progress = papers.tutor_progress[t0 : t1 + 1 : step]
-        progress = np.asarray(self._progress[side][a : b + 1 : step])
-        found = guidance(
-            aligned, progress - progress[0], float(tutor_progress.max() - tutor_progress[0]), RULES
-        )
+        mirror_q = np.asarray(self._gesture_mirror_q[a : b + 1 : step])
+        tempo = (b - a + 1) / self._reference_frames
+        pace, series = repetition_pace(patient_q, mirror_q, self._reference, tempo)
+        self._paces.append(pace)
+        own = self.options.own_pace or usual_pace(self._paces)
+        found = guidance(aligned, series, pace, own, RULES)
         return [
             {
                 "type": g.type,
@@ -337,6 +362,22 @@ class LiveAligner:
         step = parts.scoring_step
         features = repetition_features(segment[::step], [t[::step] for t in parts.templates])
         return float(parts.scorer.score(features))
+
+
+def repetition_words(event: Event, threshold: float) -> str:
+    """What the patient reads (and hears) when a repetition ends: "well done" only for one that
+    passed without a tip; a tip when there is one; a failed repetition without a tip is told its
+    score against the pass mark, so it always hears why it was not praised."""
+    number = event["index"] + 1
+    tips = [g["text"] for g in event["guidance"] if g.get("text")]
+    if tips:
+        return f"Repetition {number}: {tips[0]}"
+    if event["passed"]:
+        return f"Repetition {number}: well done."
+    return (
+        f"Repetition {number}: not counted as done well: score {event['score']:.0f}, "
+        f"{threshold:.0f} passes."
+    )
 
 
 def _grounded(points: FloatArray) -> FloatArray:

@@ -20,9 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis.online.live import Event
-from analysis.online.session import LiveSession
-from analysis.online.sources import (
+from analysis.live import Event, LiveSession
+from analysis.pipeline.model import FittedModel, load_model
+from capture.remote import run_remote
+from capture.sources import (
     Source,
     StreamInputError,
     file_source,
@@ -30,7 +31,6 @@ from analysis.online.sources import (
     print_event,
     tcp_source,
 )
-from analysis.pipeline.model import FittedModel, load_model
 
 __all__ = [
     "Source",
@@ -110,8 +110,6 @@ def run(args: argparse.Namespace) -> int:
     source = make_source(args)
     if args.model:
         return run_in_process(args.model, source)
-    from analysis.online.remote import run_remote
-
     batch = getattr(args, "batch", None)
     if batch is not None and batch < 1:
         raise StreamInputError(f"--batch must be 1 or more, got {batch}")

@@ -1,4 +1,5 @@
-"""Clinical measures in the form the pipeline stores them: small and rounded.
+"""The clinical stage: the clinical measures in the form the pipeline stores them, small and
+rounded (the measures themselves are `analysis.clinical`'s).
 
 - `repetition_angles(series, repetitions)`: each repetition with its angle ranges (0.1°).
 - `workspace_summaries(motion, involved_joints)`: per hand, the reachable workspace (relative
@@ -10,7 +11,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,17 +18,14 @@ from analysis.bvh import Motion
 from analysis.clinical.angles import angle_ranges
 from analysis.clinical.body import FloatArray
 from analysis.clinical.labels import involves_arms
+from analysis.clinical.results import AngleRange, WorkspaceSummary
 from analysis.clinical.workspace import Workspace, covered_patch, reachable_workspace
-
-if TYPE_CHECKING:  # the pipeline imports this module: its results are imported where used
-    from analysis.pipeline.results import AngleRange, RepetitionResult, WorkspaceSummary
+from analysis.pipeline.results import RepetitionResult
 
 MAX_HULL_VERTICES = 32  # 96 coordinates and about 170 face indices per hand
 
 
 def rounded(angles: Mapping[str, AngleRange], digits: int = 1) -> dict[str, AngleRange]:
-    from analysis.pipeline.results import AngleRange
-
     return {k: AngleRange(round(v.min, digits), round(v.max, digits)) for k, v in angles.items()}
 
 
@@ -57,8 +54,6 @@ def farthest_points(points: FloatArray, count: int) -> FloatArray:
 
 def small_hull(ws: Workspace, max_vertices: int = MAX_HULL_VERTICES) -> WorkspaceSummary:
     """The workspace with its hull decimated for display (areas are the full hull's)."""
-    from analysis.pipeline.results import WorkspaceSummary
-
     vertices, faces = ws.vertices, ws.faces
     if len(vertices) > max_vertices:
         vertices, faces = covered_patch(farthest_points(vertices, max_vertices))

@@ -8,7 +8,7 @@ A capture client sends JSON messages over a WebSocket (the server) or calls `han
     {"type": "end"}
 
 Events back: ``ready`` (with ``next_seq``: where a reconnecting client resumes, and ``max_fps``),
-``position`` and ``repetition`` (see `analysis.online.live`), ``error`` (``code``, ``message``,
+``position`` and ``repetition`` (see `analysis.live.aligner`), ``error`` (``code``, ``message``,
 ``seq``), and last ``summary``. A bad message gets an error event and changes nothing: a frame
 with the wrong number of values, a value that is not a finite number, a sequence number other
 than the next one (a repeat of an earlier one is ignored with a ``duplicate`` error, so a client
@@ -34,13 +34,18 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh import AnalysisInputError, BVHError, Motion, dumps, read
-from analysis.online.live import Event, LiveAligner, LiveOptions
+from analysis.live.aligner import Event, LiveAligner, LiveOptions
 from analysis.pipeline.model import FittedModel
 
 FloatArray = npt.NDArray[np.float64]
 MAX_HEADER_BYTES = 1 << 20
 MAX_BATCH = 64  # frames in one batch message
 MAX_VALUES = 8_000_000  # values kept per session, as for an upload (a 30-minute session)
+
+
+def header_text(motion: Motion) -> str:
+    """The BVH text of the skeleton with no frames (what a live session's 'start' carries)."""
+    return dumps(motion.with_frames(np.zeros((0, motion.skeleton.n_channels))))
 
 
 class ProtocolError(ValueError):

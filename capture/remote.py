@@ -27,14 +27,14 @@ import numpy.typing as npt
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed, InvalidStatus, InvalidURI
 
-from analysis.online.live import Event
-from analysis.online.sources import Source, StreamInputError, print_event
+from analysis.live import Event
+from capture.sources import Source, StreamInputError, print_event
 
 FloatArray = npt.NDArray[np.float64]
 RETRIES = 6
 SEND_SHARE = 0.8  # of the server's max_fps
 BATCH_WAIT = 0.025  # seconds the first frame of a batch may wait for the others
-MAX_BATCH = 64  # as the server takes (analysis.online.session)
+MAX_BATCH = 64  # as the server takes (analysis.live.session)
 
 
 def default_batch(frame_time: float) -> int:

@@ -1,0 +1,90 @@
+"""Paper 001's guidance types by the one tempo and reach rule (`analysis.pipeline.gestures`):
+tempo against the reference's pace and the patient's own, reach as the involved joints'
+angular excursion against the reference's."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from analysis.kinematics import quaternions as quat
+from analysis.pipeline.gestures import (
+    GuidanceRules,
+    Pace,
+    pace_guidance,
+    reach_series,
+    reference_excursion,
+    usual_pace,
+)
+
+RULES = GuidanceRules()
+
+
+def kinds(pace: Pace, own: Pace | None = None) -> list[str]:
+    return [kind for kind, _ in pace_guidance(pace, own, RULES)]
+
+
+def test_a_repetition_like_the_reference_and_the_patient_gets_nothing():
+    assert kinds(Pace(1.0, 1.0)) == []
+    assert kinds(Pace(1.3, 0.9), own=Pace(1.3, 0.9)) == []
+
+
+def test_tempo_far_from_the_reference_is_named_whoever_the_patient_is():
+    assert kinds(Pace(0.4, 1.0))[0] == "too fast"
+    assert kinds(Pace(2.8, 1.0))[0] == "too slow"
+    assert kinds(Pace(0.4, 1.0), own=Pace(0.45, 1.0))[0] == "too fast"
+
+
+def test_tempo_against_the_patients_own_pace():
+    # within the reference's band, but 0.6 of the patient's usual repetition: too fast
+    assert kinds(Pace(0.84, 1.0), own=Pace(1.4, 1.0)) == ["too fast"]
+    assert kinds(Pace(2.2, 1.0), own=Pace(1.4, 1.0)) == ["too slow"]
+    # the same repetition is this patient's usual pace: nothing to say
+    assert kinds(Pace(0.84, 1.0), own=Pace(0.84, 1.0)) == []
+
+
+def test_reach_against_the_reference_and_the_patients_own():
+    assert kinds(Pace(1.0, 0.3)) == ["incomplete"]
+    assert kinds(Pace(1.0, 0.6), own=Pace(1.0, 1.0)) == ["incomplete"]
+    assert kinds(Pace(1.0, 1.3), own=Pace(1.0, 1.0)) == ["overdone"]
+    assert kinds(Pace(1.0, 0.6), own=Pace(1.0, 0.6)) == []
+
+
+def test_the_most_pressing_comes_first():
+    both = pace_guidance(Pace(0.5, 0.6), Pace(1.0, 1.0), RULES)
+    assert [k for k, _ in both] == ["too fast", "incomplete"]
+    assert both[0][1] > both[1][1] > 1.0
+
+
+def test_usual_pace_is_the_median():
+    assert usual_pace([]) is None
+    assert usual_pace([Pace(1.0, 0.5), Pace(3.0, 0.7), Pace(1.2, 0.9)]) == Pace(1.2, 0.7)
+
+
+def bend(degrees: np.ndarray, n_joints: int = 2, moving: int = 0) -> np.ndarray:
+    """(n, J, 4): joint ``moving`` turns about x by ``degrees`` per frame, the others stay."""
+    q = np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (len(degrees), n_joints, 1))
+    q[:, moving] = quat.from_axis_angle("X", np.radians(degrees))
+    return q
+
+
+@pytest.mark.parametrize("factor", [0.6, 1.0, 1.3])
+def test_reach_is_the_excursion_against_the_reference(factor):
+    angles = 80.0 * np.sin(np.linspace(0.0, np.pi, 40))
+    still = bend(np.zeros(40))
+    tutor = bend(angles)
+    reference = reference_excursion(tutor, still, [(0, 39)], 1)
+    assert reference[0] == pytest.approx(80.0, abs=0.5)
+    series = reach_series(bend(factor * angles), still, reference)
+    assert series.max() == pytest.approx(factor, rel=0.02)
+    # the same movement with the other side (the mirror image's joint) reaches as far
+    mirrored = reach_series(still, bend(factor * angles), reference)
+    assert mirrored.max() == pytest.approx(factor, rel=0.02)
+
+
+def test_once_an_earlier_session_is_known_the_tutor_bands_widen():
+    """Half the tutor's reach in a first session is incomplete; for a patient whose earlier
+    session reached as far, it is this patient's usual reach and gets nothing."""
+    assert kinds(Pace(1.0, 0.5), own=Pace(1.0, 0.5)) == ["incomplete"]
+    assert kinds(Pace(1.0, 0.5), own=Pace(1.0, 0.5, earlier=True)) == []
+    assert kinds(Pace(1.0, 0.3), own=Pace(1.0, 0.5, earlier=True)) == ["incomplete"]
