@@ -15,6 +15,11 @@ and with one mistake made by editing its rotation channels:
   made by `tests/analysis/mistake_cases.py`.)
 - ``too fast`` / ``too slow``: the take re-timed ×0.6 / ×1.6 (`tests/analysis/guidance_cases.py`).
 
+Every mistake is analysed as the worker analyses a later session of the same patient and
+exercise: with the patient's usual pace from the unmodified session as ``own_pace``
+(`analysis.pipeline.repetition_stage.session_pace`). The tempo mistakes are also analysed as a
+first session (no earlier pace: judged against the tutor's alone), in their own columns.
+
 Per kind: the share of sessions whose first correction names the right body part and direction,
 the share whose amount is within 40 % of the truth (reach, lean), the share that fail; for the
 unmodified sessions, the share with no correction of `LARGE_DEG` or more and the share passing.
@@ -41,6 +46,9 @@ from analysis.bvh import Motion
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics import rotations
 from analysis.pipeline import AnalysisSummary, FittedModel, analyse, build_model
+from analysis.pipeline.gestures import Pace
+from analysis.pipeline.prepare import prepare
+from analysis.pipeline.repetition_stage import session_pace
 from bench.eval_assessment import SUBJECTS, load_sessions
 from tests.analysis.guidance_cases import range_scaled, retimed
 from tests.analysis.mistake_cases import arm_down, forward_lean
@@ -136,10 +144,14 @@ def evaluate(data: Path, exercise: str, subject: str) -> Counter:
          "unmodified passes": (plain.score or 0.0) >= plain.pass_threshold}
     )  # fmt: skip
     own = median_ranges(plain)
+    pace = usual_pace_of(session.motion, model, plain)
     side = moving_arm(session.motion) if EXERCISES[exercise][1] else ""
     for kind, (motion, lean) in mistakes(session.motion, exercise).items():
-        summary = analyse(motion, model).summary
+        summary = analyse(motion, model, own_pace=pace).summary
         first = first_correction(summary)
+        if kind in ("too fast", "too slow"):
+            alone = first_correction(analyse(motion, model).summary)
+            counts[f"{kind} right alone"] += right_words(kind, alone, exercise, side)
         counts[kind] += 1
         counts[f"{kind} fails"] += (summary.score or 0.0) < summary.pass_threshold
         counts[f"{kind} right"] += right_words(kind, first, exercise, side)
@@ -157,12 +169,20 @@ def evaluate(data: Path, exercise: str, subject: str) -> Counter:
     return counts
 
 
+def usual_pace_of(motion: Motion, model: FittedModel, summary: AnalysisSummary) -> Pace | None:
+    """The patient's usual pace in the unmodified session, as an earlier session gives it."""
+    parts = model.components
+    prepared = prepare(motion, model.tutor.skeleton, model.fps, parts.axis.rep_frames)
+    return session_pace(prepared, [(r.start, r.end) for r in summary.repetitions], model)
+
+
 def _share(counts: Counter, key: str, total: str) -> str:
     return f"{counts[key] / counts[total]:.2f}" if counts[total] else "–"
 
 
 HEADER = ("| exercise | reach: right | reach: amount | reach: fails | arm down: right | "
           "lean: right | lean: amount | too fast: right | too slow: right | "
+          "too fast, first session: right | too slow, first session: right | "
           "unmodified: no correction ≥ 10° | unmodified: pass |")  # fmt: skip
 
 
@@ -172,6 +192,8 @@ def row(name: str, c: Counter) -> str:
         _share(c, "reach fails", "reach"), _share(c, "arm down right", "arm down"),
         _share(c, "lean right", "lean"), _share(c, "lean close", "lean"),
         _share(c, "too fast right", "too fast"), _share(c, "too slow right", "too slow"),
+        _share(c, "too fast right alone", "too fast"),
+        _share(c, "too slow right alone", "too slow"),
         _share(c, "unmodified quiet", "unmodified"), _share(c, "unmodified passes", "unmodified"),
     ]  # fmt: skip
     return f"| {name} | " + " | ".join(cells) + " |"
@@ -181,7 +203,7 @@ def run(data: Path, exercises: list[str], jobs: int) -> list[str]:
     tasks = [(data, e, s) for e in exercises for s in SUBJECTS]
     with ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
         results = list(pool.map(evaluate, *zip(*tasks, strict=True)))
-    lines = [HEADER, "|---" * 11 + "|"]
+    lines = [HEADER, "|---" * 13 + "|"]
     total: Counter = Counter()
     for exercise in exercises:
         counts = sum((r for (_, e, _), r in zip(tasks, results, strict=True) if e == exercise),

@@ -68,8 +68,8 @@ def tutor_marks() -> tuple[list[int], list[int]]:
 
 def prepare_parent(model_path: Path | None) -> Path:
     """Import, build or load the model, warm every stage up; returns the model's path."""
+    from analysis import __main__ as cli
     from analysis.bvh import read
-    from analysis.pipeline import cli
     from analysis.pipeline.model import build_model, dump_model, load_model
 
     if model_path is None:
@@ -101,7 +101,7 @@ def child(case: tuple[int, int, list[bytes]], model_path: Path, out: Path, err: 
     """In the forked process: build the case's file, limits, output to files, the command, then
     exit without cleanup. The parent only forks and waits: the less it touches between forks,
     the fewer pages each fork makes it copy."""
-    from analysis.pipeline import cli
+    from analysis import __main__ as cli
     from tests.hostile_bvh import hostile_case
 
     seed, index, bases = case

@@ -370,6 +370,11 @@ SPECTACULAR_SETTINGS = {
         "LiveSessionStatusEnum": "webapp.live.models.LiveStatus",
         "RecordingStatusEnum": "webapp.api.serializers.RUN_STATES",
     },
+    # The analysis result's components, generated from its dataclasses (webapp/api/result_schema).
+    "POSTPROCESSING_HOOKS": [
+        "drf_spectacular.hooks.postprocess_schema_enums",
+        "webapp.api.result_schema.add_result_components",
+    ],
 }
 
 LOGGING = {

@@ -19,8 +19,9 @@ from django.db import InterfaceError, OperationalError, transaction
 from analysis import __version__ as code_version
 from analysis.bvh import AnalysisInputError, Limits, check_recording, read
 from analysis.pipeline import AnalysisResult, analyse
+from analysis.pipeline.gestures import Pace
 from webapp.patients.models import PerformanceLevel
-from webapp.recordings.models import AnalysisRun
+from webapp.recordings.models import AnalysisRun, RunStatus
 from webapp.recordings.storage import read_verified
 from workers import exercise_models, runs
 from workers.exercise_match import match_context
@@ -107,7 +108,7 @@ def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
 
     result = analyse(
         motion, model, history=history, on_progress=on_progress, limits=limits,
-        match=match_context(recording.exercise),
+        match=match_context(recording.exercise), own_pace=earlier_pace(recording),
     )  # fmt: skip
     return result, model_row
 
@@ -128,6 +129,30 @@ def previous_levels(recording) -> dict[str, float]:
         patient=recording.patient, exercise=recording.exercise
     ).values_list("joint", "gamma")
     return dict(levels)
+
+
+def earlier_pace(recording) -> Pace | None:
+    """The patient's usual pace (median tempo and excursion of the repetitions) in their latest
+    earlier session of this exercise, which paper 001's guidance judges this one against as well
+    as against the tutor (`analysis.pipeline.gestures.pace_guidance`); None for a first session
+    or one analysed before the excursion was stored."""
+    earlier = (
+        AnalysisRun.objects.filter(
+            recording__patient=recording.patient, recording__exercise=recording.exercise,
+            recording__uploaded_at__lt=recording.uploaded_at, status=RunStatus.SUCCEEDED,
+            recording__deleted_at__isnull=True,
+        )
+        .order_by("-recording__uploaded_at", "-created_at")
+        .first()
+    )  # fmt: skip
+    summary = earlier.result if earlier is not None else None
+    if summary is None or not summary.match.fits:
+        return None
+    paces = [(r.tempo, r.excursion) for r in summary.repetitions if r.excursion is not None]
+    if not paces:
+        return None
+    tempo, excursion = np.median(np.asarray(paces), axis=0)
+    return Pace(float(tempo), float(excursion), earlier=True)
 
 
 def npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:

@@ -8,7 +8,15 @@ from typing import Any
 
 from celery import shared_task
 
-from workers import analysis_task, exercise_models, housekeeping, inspection, reports, training
+from workers import (
+    analysis_task,
+    exercise_models,
+    housekeeping,
+    inspection,
+    recognition,
+    reports,
+    training,
+)
 from workers.task_guard import AnalysisTask
 
 
@@ -54,6 +62,16 @@ def analyse_recording(self, run_id: str, token: str | None = None) -> str:
             countdown=retry_delay(self.request.retries),
             exc=failure,
         ) from failure
+
+
+@shared_task(
+    name="workers.tasks.recognise_exercise",  # the default (analyses) queue, like the analyses
+    ignore_result=True,  # the answer is on the recording; a failure offers the choice, no retry
+)
+def recognise_exercise(recording_id: str) -> str:
+    """Recognise the exercise of a recording uploaded without one and store the suggestion;
+    nothing is analysed until someone confirms it."""
+    return recognition.recognise(recording_id)
 
 
 @shared_task(name="workers.tasks.requeue_lost_runs", ignore_result=True)

@@ -29,24 +29,27 @@ ankle whose range wanders by 20° between the tutor's own repetitions) gets a wi
 - ``held`` / ``held_back``: the trunk's posture over a repetition (the middle of its range) is
   more than `HELD_DEG` off the tutor's, forward (or to the right) / backward (to the left): a lean
   held all through, which a range does not show.
-- ``fast`` / ``slow``: a repetition lasts less than `FAST_BELOW` or more than `SLOW_ABOVE`
-  times the tutor's.
+- ``fast`` / ``slow``: paper 001's pace rule called the repetition "too fast" / "too slow"
+  (`analysis.pipeline.gestures.pace_guidance`: against the tutor's pace and, when an earlier
+  session gave it, the patient's own; the same rule live), or a failed repetition lasts less than
+  `FAST_BELOW` or more than `SLOW_ABOVE` times the tutor's. Pace is not part of the score, so a
+  passed recording is still told its tempo (a tip, in percent, never an angle).
 - ``good``: an involved angle that no repetition got wrong: what went well.
 
 Feedback agrees with the score, both ways. A plain error fails its repetition whatever its score
 (`plainly_off`, applied by `analysis.pipeline.advice_stage`): a main angle (an involved one the
-tutor moves at least `MAIN_SHARE` as far as its most-moved) covering less than `PLAIN_SHARE` of
-the tutor's range in a repetition short of `PLAIN_REACH` along the movement, or the trunk held
-more than `PLAIN_LEAN_DEG` off the tutor's posture. And a difference counts only in a repetition
-that did not pass, and a recording that passed is told at most small tips (below `SMALL_DEG`;
-with the tolerances above, that is no angle correction at all). A finding counts when it happens
-in at least `MIN_SHARE` of the repetitions; its amount is the median difference over those
+tutor moves at least `MAIN_SHARE` as far as its most-moved) covering less than `PLAIN_SHARE` of the
+tutor's range in a repetition short of `PLAIN_REACH` along the movement, or the trunk held more
+than `PLAIN_LEAN_DEG` off the tutor's posture. And a difference counts only in a repetition that
+did not pass, and a recording that passed is told at most small tips (below `SMALL_DEG`; with the
+tolerances above, that is no angle correction at all) and its tempo. A finding counts when it
+happens in at least `MIN_SHARE` of the repetitions; its amount is the median difference over those
 repetitions. Corrections are ranked the angles' first (the involved ones and the trunk's), then the
 compensations measured from positions (noisier), then tempo, each by size (degrees off times how
 often): only involved angles, the trunk and the compensations are ever corrected. Ranges and
-postures, not single values, are compared; a one-sided exercise done with the other side is compared
-side for side (``mirrored``). Thresholds are wide on purpose (goniometer repeatability is 5–10°,
-Kinect-class joint angles wander more).
+postures, not single values, are compared; a one-sided exercise done with the other side is
+compared side for side (``mirrored``). Thresholds are wide on purpose (goniometer repeatability is
+5–10°, Kinect-class joint angles wander more).
 """
 
 from __future__ import annotations
@@ -71,6 +74,7 @@ HELD_DEG = 12.0  # the trunk's posture off the tutor's by more: a lean held all 
 SMALL_DEG = 10.0  # a recording that passed is told only differences below this (° or %)
 FAST_BELOW, SLOW_ABOVE = 0.6, 1.8
 MIN_SHARE = 0.4
+TIPS = ("good", "fast", "slow")  # said whether the recording passed or not
 SPREAD_FACTOR = 2.0  # times the tutor's own spread (SD of the range over its repetitions)
 TRUNK = ("trunk_flexion", "trunk_lateral_flexion")
 PREFERRED = "shoulder_elevation"  # speaks for the arm when moved: the arm's angle to the trunk
@@ -89,6 +93,7 @@ class RepetitionMeasures:
     passed: bool = False
     middles: Mapping[str, float] = field(default_factory=dict)
     reach: float | None = None  # along the exercise's progress axis, 1 = as far as the tutor
+    pace: Collection[str] = ()  # paper 001's guidance types of the repetition ("too fast"…)
 
 
 @dataclass(frozen=True)
@@ -274,12 +279,20 @@ def posture_findings(
     return [f for f in out if f is not None]
 
 
+def _paced(rep: RepetitionMeasures, guidance: str, far_off: bool) -> bool:
+    """The pace rule gave the repetition this guidance, or it failed far off the tutor's pace."""
+    return guidance in rep.pace or (far_off and not rep.passed)
+
+
 def tempo_findings(reps: Sequence[RepetitionMeasures]) -> list[Finding]:
-    """Too fast or too slow against the tutor's duration (module docstring)."""
+    """Too fast or too slow: by the pace rule, or a failed repetition far off the tutor's
+    duration (module docstring). The amount is against the tutor's duration, so a repetition
+    the rule finds too fast for the patient's own pace but still slower than the tutor's is not
+    told to slow down (the sentence could not be true)."""
     fast = [(k, 100.0 * (1 - r.tempo), 100.0 * r.tempo) for k, r in enumerate(reps)
-            if r.tempo < FAST_BELOW and not r.passed]  # fmt: skip
+            if r.tempo < 1.0 and _paced(r, "too fast", r.tempo < FAST_BELOW)]  # fmt: skip
     slow = [(k, 100.0 * (r.tempo - 1), 100.0 * r.tempo) for k, r in enumerate(reps)
-            if r.tempo > SLOW_ABOVE and not r.passed]  # fmt: skip
+            if r.tempo > 1.0 and _paced(r, "too slow", r.tempo > SLOW_ABOVE)]  # fmt: skip
     found = [_finding("fast", "", 100.0, fast, len(reps)),
              _finding("slow", "", 100.0, slow, len(reps))]  # fmt: skip
     return [f for f in found if f is not None]
@@ -306,7 +319,7 @@ def findings(
         *angle_findings(reps, ref.ranges, mirrored, ref.spread, ref.involved),
         *posture_findings(reps, ref.middles, mirrored), *extra, *tempo_findings(reps),
     ]  # fmt: skip
-    kept = [f for f in found if f.kind == "good" or not passed or f.amount < SMALL_DEG]
+    kept = [f for f in found if f.kind in TIPS or not passed or f.amount < SMALL_DEG]
     placed = [
         Finding(f.kind, f.angle, f.amount, f.tutor, f.patient, f.repetitions,
                 reps[f.repetitions[0] - 1].start, f.share)

@@ -1,6 +1,7 @@
-"""The pipeline: the exercise model (fitting, file format), the stages in order, the command line.
+"""The pipeline: the exercise model (fitting, file format), the stages in order, typed results.
 
-`analyse` is the only place the stage order lives; workers and the command line call it.
+`analyse` runs the stages in the order of `stage_order.ORDER`, the one list of them; workers and
+the command line (`analysis/__main__.py`) call it.
 """
 
 from analysis.pipeline.match import Candidate, MatchContext  # whether a recording fits (match.py)

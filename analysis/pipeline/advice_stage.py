@@ -94,17 +94,19 @@ def tutor_reference(model: FittedModel) -> Reference:
 def repetition_measures(
     repetitions: Sequence[RepetitionResult], motion: Motion | None = None
 ) -> list[RepetitionMeasures]:
-    """Each repetition's angle ranges, postures (middles of the ranges), tempo and pass; with
-    the recording's ``motion``, its compensations' too."""
+    """Each repetition's angle ranges, postures (middles of the ranges), tempo and pass (a
+    verdict not stored counts as not passed); with the recording's ``motion``, its
+    compensations' too."""
     series = compensations(motion) if motion is not None else {}
     extra = _stretches(series, [(r.start, r.end) for r in repetitions])
     return [
         RepetitionMeasures(
-            r.start, {**{k: v.range for k, v in r.clinical_angles.items()}, **more[0]}, r.tempo,
-            r.passed, {**{k: (v.min + v.max) / 2 for k, v in r.clinical_angles.items()}, **more[1]},
-            r.reach,
+            r.start, {**{k: v.range for k, v in r.clinical_angles.items()}, **ranges}, r.tempo,
+            r.passed is True,
+            {**{k: (v.min + v.max) / 2 for k, v in r.clinical_angles.items()}, **middles},
+            r.reach, tuple(g.type for g in r.guidance),
         )
-        for r, more in zip(repetitions, extra, strict=True)
+        for r, (ranges, middles) in zip(repetitions, extra, strict=True)
     ]  # fmt: skip
 
 

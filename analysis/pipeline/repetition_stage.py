@@ -48,6 +48,7 @@ class GestureResult:
     score: float
     alignment_tau: float
     similarity: float
+    excursion: float  # `Pace.reach`: the involved joints' excursion over the tutor's
 
 
 def synchronise(landmarks: tuple[KeyPose, ...], model: FittedModel) -> Synchronised:
@@ -135,5 +136,6 @@ def gesture_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds them)
         out.append(GestureResult(
             guidance=shifted, score=gesture_score(aligned.mean_cost, papers.gesture_scale),
             alignment_tau=aligned.alignment_tau, similarity=aligned.similarity_deg,
+            excursion=round(pace.reach, 3),
         ))  # fmt: skip
     return out

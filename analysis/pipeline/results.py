@@ -95,12 +95,15 @@ class RepetitionResult:
     reach: float = 0.0
     tempo: float = 1.0
     guidance: tuple[Guidance, ...] = ()
-    passed: bool = True
+    passed: bool | None = True  # None: a run stored before verdicts (judge by the score)
     gbdtw_score: float | None = None
     alignment_tau: float | None = None
     similarity: float | None = None
     # anatomical name -> its range over this repetition (degrees, 0.1°); empty in older runs
     clinical_angles: Mapping[str, AngleRange] = field(default_factory=dict)
+    # paper 001's reach: the involved joints' angular excursion over the tutor's (1 = as far);
+    # with tempo, what a later session's pace is judged against (None in older runs)
+    excursion: float | None = None
 
     @property
     def main_guidance(self) -> str:
@@ -113,7 +116,7 @@ class RepetitionResult:
             "passed": self.passed, "deviation": self.deviation, "reach": self.reach,
             "tempo": self.tempo, "guidance": [g.to_json() for g in self.guidance],
             "gbdtw_score": self.gbdtw_score, "alignment_tau": self.alignment_tau,
-            "similarity": self.similarity,
+            "similarity": self.similarity, "excursion": self.excursion,
             **_angles_json(self.clinical_angles),
         }  # fmt: skip
 
@@ -128,11 +131,12 @@ class RepetitionResult:
             reach=float(data.get("reach", 0.0)),
             tempo=float(data.get("tempo", 1.0)),
             guidance=_guidance_from_json(data),
-            passed=bool(data.get("passed", True)),
+            passed=_optional_bool(data.get("passed")),
             gbdtw_score=_optional_float(data.get("gbdtw_score")),
             alignment_tau=_optional_float(data.get("alignment_tau")),
             similarity=_optional_float(data.get("similarity")),
             clinical_angles=_angles_from_json(data.get("clinical_angles")),
+            excursion=_optional_float(data.get("excursion")),
         )
 
 
@@ -157,6 +161,14 @@ def _angles_from_json(data: Mapping[str, Any] | None) -> dict[str, AngleRange]:
 
 def _optional_float(value: Any) -> float | None:
     return None if value is None else float(value)
+
+
+def _optional_bool(value: Any) -> bool | None:
+    return None if value is None else bool(value)
+
+
+def _optional_str(value: Any) -> str | None:
+    return None if value is None else str(value)
 
 
 def _guidance_from_json(data: Mapping[str, Any]) -> tuple[Guidance, ...]:
@@ -214,7 +226,8 @@ class AnalysisSummary:
     range_of_motion: Mapping[str, float] = field(default_factory=dict)
     tempo: float | None = None
     timings_ms: Mapping[str, float] = field(default_factory=dict)
-    segmentation: str = "landmarks"  # "fallback": cut on the progress axis (no key-pose cycle)
+    # "fallback": cut on the progress axis (no key-pose cycle); None: a run stored before it
+    segmentation: str | None = "landmarks"
     periodic: PeriodicSummary = field(default_factory=PeriodicSummary)
     pass_threshold: float = 70.0  # on the 0–100 scale; the same on every exercise since issue 17
     # anatomical name (CONTRACTS.md, e.g. "knee_flexion_left") -> its range over the recording
@@ -285,7 +298,7 @@ class AnalysisSummary:
             },
             tempo=None if tempo is None else float(tempo),
             timings_ms={str(k): float(v) for k, v in (data.get("timings_ms") or {}).items()},
-            segmentation=str(data.get("segmentation", "fallback")),
+            segmentation=_optional_str(data.get("segmentation")),
             periodic=PeriodicSummary.from_json(data.get("periodic") or {}),
             pass_threshold=float(data.get("pass_threshold", 50.0)),
             clinical_angles={
@@ -300,3 +313,29 @@ class AnalysisSummary:
             advice=Advice.from_json(data.get("advice")),
             match=ExerciseMatch.from_json(data.get("match")),
         )
+
+
+@dataclass(frozen=True)
+class JsonShape:
+    """Where a result class's ``to_json`` differs from its fields: keys it adds (with their type),
+    fields it leaves out, keys it writes only sometimes, and fields it writes in another type. The
+    API's OpenAPI schema is generated from the fields and these (`webapp.api.result_schema`), so
+    a change to ``to_json`` that is not declared here fails the schema tests."""
+
+    added: Mapping[str, Any] = field(default_factory=dict)
+    left_out: tuple[str, ...] = ()
+    optional: tuple[str, ...] = ()
+    written_as: Mapping[str, Any] = field(default_factory=dict)
+
+
+JSON_SHAPES: Mapping[type, JsonShape] = {
+    AnalysisSummary: JsonShape(added={"repetition_count": int}),
+    # a repetition's angles as [min, max] pairs, and only when it has some (older runs)
+    RepetitionResult: JsonShape(
+        optional=("clinical_angles",),
+        written_as={"clinical_angles": Mapping[str, tuple[float, float]]},
+    ),
+    AngleRange: JsonShape(added={"range": float}),
+    ExerciseMatch: JsonShape(optional=("message", "looks_like")),  # only when it does not fit
+    Comment: JsonShape(left_out=("feedback",)),
+}

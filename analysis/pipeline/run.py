@@ -1,4 +1,5 @@
-"""Analysing one recording against an exercise model: the only place the stage order lives.
+"""Analysing one recording against an exercise model: runs the stages in the order of
+`analysis.pipeline.stage_order.ORDER` (the one list of that order; the timer refuses another).
 
 ``analyse(motion, model, history=None, on_progress=None)`` is a pure function of its inputs. It
 returns a frozen `AnalysisResult` whose ``to_json()`` holds the fields of ``analyse --json``
@@ -32,6 +33,7 @@ from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import Prepared, mirrored, prepare, progress_signal
 from analysis.pipeline.repetition_stage import gesture_results, synchronise
 from analysis.pipeline.results import AnalysisSummary, ExerciseMatch, KeyPose, RepetitionResult
+from analysis.pipeline.stage_order import ORDER, Stage, StageOrder
 from analysis.pipeline.stages import (
     assess_landmarks,
     feedback_items,
@@ -66,41 +68,26 @@ class AnalysisResult:
 
 
 class StageTimer:
-    """Times each stage (ms) and reports progress before it starts."""
+    """Times each stage (ms) and reports progress before it starts; the stages' order, words and
+    fractions are `stage_order.ORDER`'s (a stage out of that order raises `StageOrderError`)."""
 
-    def __init__(self, on_progress: Progress | None, stages: list[tuple[str, str]]) -> None:
+    def __init__(self, on_progress: Progress | None, order: tuple[Stage, ...] = ORDER) -> None:
         self.on_progress = on_progress
-        self.keys = [key for key, _ in stages]
-        self.labels = dict(stages)
+        self.order = StageOrder(order)
         self.timings: dict[str, float] = {}
 
     @contextmanager
-    def __call__(self, stage: str) -> Iterator[None]:
+    def __call__(self, key: str) -> Iterator[None]:
+        stage = self.order.enter(key)
         if self.on_progress is not None:
-            self.on_progress(self.labels[stage], self.keys.index(stage) / len(self.keys))
+            self.on_progress(stage.label, self.order.fraction(key))
         start = time.perf_counter()
         yield
-        self.timings[stage] = round((time.perf_counter() - start) * 1000.0, 3)
+        self.timings[key] = round((time.perf_counter() - start) * 1000.0, 3)
 
 
-# (timing key, what the progress bar says)
-STAGES = [
-    ("prepare", "reading the recording"),
-    ("landmark_identification", "finding key poses"),
-    ("landmark_refining", "refining key poses"),
-    ("periodic_analysis", "checking the order of key poses"),
-    ("repetitions", "counting repetitions"),
-    ("match", "checking that the recording shows the exercise"),
-    ("synchronisation", "matching the reference in time"),
-    ("alignment", "comparing each repetition"),
-    ("assessment", "assessing each key pose"),
-    ("scores", "scoring repetitions"),
-    ("performance_level", "updating the level"),
-    ("adjustment", "preparing the playback"),
-    ("clinical_angles", "measuring joint angles"),
-    ("feedback", "writing feedback"),
-    ("workspace", "measuring the reach of each hand"),
-]
+# (timing key, what the progress bar says), read from the one list of the stages
+STAGES = tuple((stage.key, stage.label) for stage in ORDER)
 
 
 def analyse(
@@ -119,7 +106,7 @@ def analyse(
     (`analysis.pipeline.match`: then no repetition and no score); ``own_pace``: the patient's
     usual tempo and reach from an earlier session (`repetition_stage.session_pace`), which
     paper 001's guidance judges this one against as well as against the tutor."""
-    timer = StageTimer(on_progress, STAGES)
+    timer = StageTimer(on_progress)
     parts = model.components
     papers = parts.papers
     with timer("prepare"):
@@ -148,7 +135,7 @@ def analyse(
         if used_mirror:
             scored = replace(prepared, points=mirrored(prepared.points, parts.mirror))
         gestures = gesture_results(prepared, cut.segments, progress, sync, model, own_pace)
-    with timer("assessment"):  # before the scores: a clearly missed key pose caps its repetition
+    with timer("assessment"):  # before the scores (see stage_order)
         assessment = assess_landmarks(prepared, landmarks, model)
     with timer("scores"):
         repetitions = repetition_results(
@@ -164,7 +151,7 @@ def analyse(
         repetitions = repetition_angles(series, repetitions)
         # a plain error (a main angle far short, a trunk lean held) fails its repetition
         repetitions = plain_errors_fail(repetitions, model, used_mirror, prepared.motion)
-    with timer("feedback"):  # after the angles: corrections compare them with the tutor's
+    with timer("feedback"):  # after the angles (see stage_order)
         advice, feedback = feedback_items(
             repetitions, assessment, model, used_mirror, prepared.motion
         )

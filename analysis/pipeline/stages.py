@@ -96,7 +96,7 @@ def repetition_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds th
             tempo=round(float((end - start + 1) / tutor_frames), 3),
             guidance=gesture.guidance, passed=bool(score >= threshold),
             gbdtw_score=gesture.score, alignment_tau=gesture.alignment_tau,
-            similarity=gesture.similarity,
+            similarity=gesture.similarity, excursion=gesture.excursion,
         ))  # fmt: skip
     return tuple(out)
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from analysis.pipeline.cli import main
+from analysis.__main__ import main
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "data" / "ui-prmd"

@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from analysis.__main__ import main
 from analysis.bvh import read
 from analysis.live import LiveSession, RateLimit
 from analysis.pipeline import analyse, build_model, dump_model
-from analysis.pipeline.cli import main
 from capture.stream import Source, header_text
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"

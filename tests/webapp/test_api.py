@@ -6,6 +6,7 @@ import pytest
 from django.core.files.uploadedfile import SimpleUploadedFile
 from rest_framework.test import APIClient
 
+from analysis.pipeline import AnalysisSummary
 from tests.personas import PASSWORD, fixture_bytes, make_exercise, make_recording
 from webapp.recordings.models import Recording
 
@@ -185,14 +186,11 @@ def test_full_result_on_the_detail_and_behind_fields_result(api, world, history)
     result = detail["result"]
     assert results[str(history[0].pk)] == result
     assert results[str(history[2].pk)] is None  # not analysed yet
-    assert result["fps"] == 30.0 and result["score"] == 71.5
-    assert result["repetitions"][1]["score"] == 63.1 and result["repetitions"][1]["passed"]
-    assert result["timings_ms"]["alignment"] == 12.3
-    assert result["clinical_angles"]["knee_flexion_left"] == {
-        "min": 1.2,
-        "max": 97.7,
-        "range": 96.4,
-    }
+    # the typed result's JSON (one contract with the pipeline), at the pipeline's precision
+    assert result == AnalysisSummary.from_json(analysed_summary()).to_json()
+    assert result["score"] == 71.45678 and result["repetitions"][1]["passed"]
+    assert result["repetitions"][0]["passed"] is False and result["segmentation"] is None
+    assert result["clinical_angles"]["knee_flexion_left"]["range"] == 96.42
     for key in ("frames", "landmarks", "assessment", "feedback", "repetitions"):
         assert key in result
     assert detail["uploaded_at"].endswith("Z") and detail["run"]["created_at"].endswith("Z")

@@ -215,7 +215,7 @@ def test_patient_page_links_the_history_csv_the_browser_can_fetch(client, world,
     assert response.status_code == 200
     assert response["Content-Type"].startswith("text/csv")
     body = response.content.decode()
-    assert "knee_flexion_left_range" in body.splitlines()[0] and "92.5" in body
+    assert "left knee flexion range (°)" in body.splitlines()[0] and "92.5" in body
     client.logout()
     assert client.get(url, HTTP_ACCEPT=browser_accept).status_code in (401, 403)
 

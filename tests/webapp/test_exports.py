@@ -23,6 +23,7 @@ from fhirclient.models.patient import Patient as R4Patient
 from rest_framework.test import APIClient
 
 from analysis.clinical import ANGLE_NAMES
+from analysis.clinical.labels import angle_label
 from analysis.pipeline.results import AnalysisSummary, AngleRange, RepetitionResult
 from tests.personas import make_exercise, make_recording
 from webapp.accounts.tokens import issue_token
@@ -75,6 +76,10 @@ def rows_of(response) -> list[dict[str, str]]:
     return list(csv.DictReader(io.StringIO(response.content.decode())))
 
 
+def angle_column(name: str) -> str:
+    return f"{angle_label(name).lower()} range (°)"
+
+
 def test_history_csv_one_row_per_analysed_recording(world, history):
     url = reverse("api-patient-history-csv", kwargs={"pk": world.patient.pk})
     response = api(world.therapist).get(url)
@@ -82,16 +87,19 @@ def test_history_csv_one_row_per_analysed_recording(world, history):
     assert response["Content-Type"].startswith("text/csv")
     assert "attachment" in response["Content-Disposition"]
     header = next(csv.reader(io.StringIO(response.content.decode())))
-    assert header[:5] == ["date", "exercise", "score", "repetitions", "passed"]
-    assert header[5:] == [f"{name}_range" for name in ANGLE_NAMES]
+    assert header[:4] == ["date (UTC)", "exercise", "score (/100)", "repetitions (count)"]
+    assert header[4:6] == ["repetitions passed (count)", "pain (0-10)"]
+    assert header[6:-1] == [angle_column(name) for name in ANGLE_NAMES]
+    assert "left knee flexion range (°)" in header and header[-1] == "note"
     old, new = rows_of(response)
     assert old["exercise"] == new["exercise"] == "Deep squat"
-    assert old["date"] < new["date"]
-    assert (float(old["score"]), old["repetitions"], old["passed"]) == (61.5, "3", "2")
-    assert all(old[f"{name}_range"] == "" for name in ANGLE_NAMES)  # older run: empty cells
-    assert float(new["knee_flexion_left_range"]) == KNEE.range == 92.5
-    assert float(new["trunk_flexion_range"]) == TRUNK.range
-    assert new["knee_flexion_right_range"] == ""
+    assert old["date (UTC)"] < new["date (UTC)"]
+    counts = (old["repetitions (count)"], old["repetitions passed (count)"])
+    assert (float(old["score (/100)"]), *counts) == (61.5, "3", "2")
+    assert all(old[angle_column(name)] == "" for name in ANGLE_NAMES)  # older run: empty cells
+    assert float(new["left knee flexion range (°)"]) == KNEE.range == 92.5
+    assert float(new[angle_column("trunk_flexion")]) == TRUNK.range
+    assert new["right knee flexion range (°)"] == ""
     assert AuditEvent.objects.filter(action="export", patient_id=world.patient.pk).exists()
 
 
@@ -104,14 +112,17 @@ def test_history_csv_opens_in_pandas_with_the_documented_columns(world, history)
     leading = [c.strip() for c in documented.group(1).split(",")]
     url = reverse("api-patient-history-csv", kwargs={"pk": world.patient.pk})
     frame = pd.read_csv(io.BytesIO(api(world.therapist).get(url).content))
-    assert list(frame.columns) == [*leading, *(f"{name}_range" for name in ANGLE_NAMES)]
+    angles = [angle_column(name) for name in ANGLE_NAMES]
+    assert list(frame.columns) == [*leading, *angles, "note"]
     assert len(frame) == 2  # the two analysed recordings; the one not analysed yet is left out
-    assert pd.to_datetime(frame["date"]).is_monotonic_increasing
-    assert frame["score"].tolist() == [61.5, 80.0]
-    assert frame["repetitions"].tolist() == [3, 3] and frame["passed"].tolist() == [2, 2]
-    assert frame["knee_flexion_left_range"].isna().tolist() == [True, False]
-    assert frame["knee_flexion_left_range"].iloc[1] == KNEE.range
-    assert frame[[f"{name}_range" for name in ANGLE_NAMES]].iloc[0].isna().all()
+    assert pd.to_datetime(frame["date (UTC)"]).is_monotonic_increasing
+    assert frame["score (/100)"].tolist() == [61.5, 80.0]
+    assert frame["repetitions (count)"].tolist() == [3, 3]
+    assert frame["repetitions passed (count)"].tolist() == [2, 2]
+    assert frame["left knee flexion range (°)"].isna().tolist() == [True, False]
+    assert frame["left knee flexion range (°)"].iloc[1] == KNEE.range
+    assert frame[angles].iloc[0].isna().all()
+    assert frame["note"].isna().all()  # both recordings show their exercise
 
 
 def test_history_csv_for_a_patient_and_asking_for_csv(world, history):

@@ -1,5 +1,5 @@
-"""Uploading without an exercise: the system recognises it (paper 002 retrieval) and asks the
-uploader to confirm before analysing; page and API."""
+"""Uploading without an exercise: a worker recognises it (paper 002 retrieval; eager here, its
+message handed over after the commit) and the uploader confirms before analysing; page and API."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import datetime
 
 import pytest
 from django.core.files.uploadedfile import SimpleUploadedFile
+from django.test import TestCase
 from django.urls import reverse
 from rest_framework.test import APIClient
 
@@ -31,7 +32,12 @@ def upload_page(client, world, content: bytes):
         "exercise": "",
         "file": SimpleUploadedFile("t.bvh.gz", content),
     }
-    return client.post(reverse("recordings:upload"), data)
+    with TestCase.captureOnCommitCallbacks(execute=True):  # the eager recognition runs
+        return client.post(reverse("recordings:upload"), data)
+
+
+def confirm_url(recording) -> str:
+    return reverse("recordings:confirm", kwargs={"pk": recording.pk})
 
 
 def test_page_upload_without_exercise_suggests_and_confirms(
@@ -42,13 +48,13 @@ def test_page_upload_without_exercise_suggests_and_confirms(
     response = upload_page(client, world, fixture_bytes(SQUAT))
     recording = Recording.objects.get()
     assert response.status_code == 302
-    assert response["Location"] == reverse("recordings:confirm", kwargs={"pk": recording.pk})
+    assert response["Location"] == reverse("recordings:detail", kwargs={"pk": recording.pk})
     assert recording.exercise is None and recording.suggested_exercise == squat
     assert not AnalysisRun.objects.exists(), "nothing is analysed before the confirmation"
-    page = client.get(response["Location"])
+    page = client.get(confirm_url(recording))
     assert "Deep squat" in page.content.decode()
     with django_capture_on_commit_callbacks(execute=True):
-        answer = client.post(response["Location"], {"exercise": str(squat.pk)})
+        answer = client.post(confirm_url(recording), {"exercise": str(squat.pk)})
     assert answer.status_code == 302
     recording.refresh_from_db()
     assert recording.exercise == squat
@@ -68,8 +74,8 @@ def test_confirming_a_mismatched_skeleton_is_a_form_error(client, world, exercis
     squat, _ = exercises
     text = gzip.decompress(fixture_bytes(SQUAT)).decode().replace("LeftFoot", "LeftPaw")
     client.force_login(world.therapist)
-    response = upload_page(client, world, gzip.compress(text.encode()))
-    answer = client.post(response["Location"], {"exercise": str(squat.pk)})
+    upload_page(client, world, gzip.compress(text.encode()))
+    answer = client.post(confirm_url(Recording.objects.get()), {"exercise": str(squat.pk)})
     assert answer.status_code == 400
     assert "skeleton does not match" in answer.content.decode()
     assert Recording.objects.get().exercise is None and not AnalysisRun.objects.exists()
@@ -80,17 +86,20 @@ def test_api_upload_without_exercise_then_confirm(world, exercises, monkeypatch)
     monkeypatch.setattr("workers.tasks.analyse_recording.delay", lambda run_id: None)
     api = APIClient()
     api.force_authenticate(world.therapist)
-    created = api.post(
-        "/api/v1/recordings/",
-        {
-            "patient": str(world.patient.pk),
-            "file": SimpleUploadedFile("t.bvh.gz", fixture_bytes(SQUAT)),
-        },
-        format="multipart",
-    )
+    with TestCase.captureOnCommitCallbacks(execute=True):  # the eager recognition runs
+        created = api.post(
+            "/api/v1/recordings/",
+            {
+                "patient": str(world.patient.pk),
+                "file": SimpleUploadedFile("t.bvh.gz", fixture_bytes(SQUAT)),
+            },
+            format="multipart",
+        )
     assert created.status_code == 201, created.content
     body = created.json()
-    assert body["status"] is None and body["suggested_exercise"] == str(squat.pk)
+    assert body["status"] is None and body["recognition"] == "queued"
+    recognised = api.get(f"/api/v1/recordings/{body['id']}/").json()
+    assert recognised["suggested_exercise"] == str(squat.pk) and recognised["recognition"] == "done"
     url = f"/api/v1/recordings/{body['id']}/confirm/"
     assert api.post(url, {"exercise": "nonsense"}, format="json").status_code == 400
     other_clinic = make_exercise(world.other_clinic, name="Elsewhere")

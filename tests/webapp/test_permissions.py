@@ -73,6 +73,7 @@ CASES = [
     # The therapist's token: they and the clinic admin may revoke it, a colleague cannot see it.
     Case("accounts:token-revoke", "token", "post", (302, 404, 302, 404, 403, 403, 302)),
     Case("audit:events", None, "get", (403, 403, 200, 403, 403, 403, 302)),
+    Case("audit:export", None, "get", ADMIN_ONLY_PAGE),
     # The team page and its actions are the clinic admin's (the account named is the colleague);
     # the therapist invites their own patient from the patient page, not a colleague's.
     Case("accounts:team", None, "get", ADMIN_ONLY_PAGE),
@@ -93,6 +94,7 @@ CASES = [
     Case("patients:archive", "patient", "post", (302, 302, 302, 404, 403, 403, 302)),
     Case("patients:progress", "patient", "get", OWN_OBJECT),
     Case("patients:history-csv", "patient", "get", OWN_OBJECT),
+    Case("patients:compare", "patient", "get", OWN_OBJECT),
     Case("exercises:list", None, "get", STAFF_PAGE),
     Case("exercises:create", None, "get", STAFF_PAGE),
     Case("exercises:detail", "exercise", "get", STAFF_ONLY_OBJECT),
@@ -157,6 +159,12 @@ CASES = [
     Case("api-user-deactivate", "account", "post", ADMIN_ONLY_API),
     Case("api-user-reactivate", "account", "post", ADMIN_ONLY_API),
     Case("api-user-password-link", "account", "post", (403, 403, 201, 403, 403, 403, 401)),
+    # Goals and clinical notes: staff write (an empty form is refused with a message on the page
+    # it returns to), the patient reads their own.
+    Case("patients:add-goal", "patient", "post", (302, 302, 302, 404, 403, 403, 302)),
+    Case("recordings:add-note", "recording", "post", (302, 302, 302, 404, 403, 403, 302)),
+    Case("api-patient-goals", "patient", "get", OWN_API_OBJECT),
+    Case("api-recording-notes", "recording", "get", OWN_API_OBJECT),
 ]
 
 

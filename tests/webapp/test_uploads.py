@@ -125,7 +125,7 @@ def test_same_file_again_while_waiting_for_its_exercise_reuses_that_upload(
     client.force_login(world.therapist)
     first = upload(client, world.patient, None, fixture_bytes(GOOD), pain_score="4")
     waiting = Recording.objects.get()
-    assert first["Location"] == reverse("recordings:confirm", kwargs={"pk": waiting.pk})
+    assert first["Location"] == reverse("recordings:detail", kwargs={"pk": waiting.pk})
     assert waiting.exercise is None and not AnalysisRun.objects.exists()
 
     # Again without an exercise: the same waiting upload, with the new answers.
@@ -154,8 +154,10 @@ def test_confirming_the_suggestion_starts_the_analysis(
     enqueued = []
     monkeypatch.setattr("workers.tasks.analyse_recording.delay", enqueued.append)
     client.force_login(world.therapist)
-    confirm_url = upload(client, world.patient, None, fixture_bytes(GOOD))["Location"]
+    with django_capture_on_commit_callbacks(execute=True):  # the eager recognition runs
+        upload(client, world.patient, None, fixture_bytes(GOOD))
     recording = Recording.objects.get()
+    confirm_url = reverse("recordings:confirm", kwargs={"pk": recording.pk})
     assert recording.suggested_exercise == exercise
     page = client.get(confirm_url)
     assert page.context["form"].initial["exercise"] == exercise.pk

@@ -15,14 +15,12 @@ they use the local code system `LOCAL_SYSTEM` (codes: ``session-score``, ``repet
 
 from __future__ import annotations
 
-import csv
 import uuid
 from typing import Any
 
 from django.conf import settings
 from django.http import HttpResponse
 from django.utils import timezone
-from django.utils.text import slugify
 from drf_spectacular.types import OpenApiTypes
 from drf_spectacular.utils import OpenApiResponse, extend_schema
 from rest_framework.renderers import BaseRenderer, JSONRenderer
@@ -34,6 +32,12 @@ from analysis.clinical import ANGLE_NAMES
 from analysis.pipeline.results import AnalysisSummary
 from webapp.accounts.permissions import get_patient_for_user
 from webapp.audit import log
+from webapp.patients.history_export import (
+    analysed_recordings,
+    exercise_name,
+    history_csv_response,
+    passed_count,
+)
 from webapp.patients.models import Patient
 from webapp.recordings.models import Recording
 
@@ -48,48 +52,6 @@ CATEGORY = {
         }
     ]
 }
-CSV_COLUMNS = ["date", "exercise", "score", "repetitions", "passed"]
-ANGLE_COLUMNS = [f"{name}_range" for name in ANGLE_NAMES]
-
-
-def analysed_recordings(patient: Patient) -> list[tuple[Recording, AnalysisSummary]]:
-    """Each recording with a succeeded run and that run's result, oldest first."""
-    recordings = (
-        Recording.objects.filter(patient=patient)
-        .select_related("exercise")
-        .prefetch_related("runs")
-        .order_by("uploaded_at")
-    )
-    out = []
-    for recording in recordings:
-        run = recording.latest_succeeded_run()
-        result = run.result if run is not None else None
-        if result is not None:
-            out.append((recording, result))
-    return out
-
-
-def passed_count(result: AnalysisSummary) -> int | str:
-    """Repetitions that passed; empty when the result does not say (no ``passed`` attribute)."""
-    flags = [getattr(rep, "passed", None) for rep in result.repetitions]
-    known = [flag for flag in flags if flag is not None]
-    return sum(bool(flag) for flag in known) if known or not flags else ""
-
-
-def exercise_name(recording: Recording) -> str:
-    return recording.exercise.name if recording.exercise else ""
-
-
-def csv_row(recording: Recording, result: AnalysisSummary) -> list[Any]:
-    angles = result.clinical_angles
-    return [
-        recording.uploaded_at.isoformat(),
-        exercise_name(recording),
-        "" if result.score is None else round(result.score, 2),  # None: not the exercise
-        result.repetition_count,
-        passed_count(result),
-        *(angles[name].range if name in angles else "" for name in ANGLE_NAMES),
-    ]
 
 
 class CSVRenderer(BaseRenderer):
@@ -112,22 +74,16 @@ def audited_patient(request: Request, pk) -> Patient:
 
 
 class PatientHistoryCSV(APIView):
-    """One row per analysed recording: date, exercise, score, repetitions, repetitions passed,
-    then each clinical angle's range in degrees (empty when the run did not measure it)."""
+    """One row per analysed recording (`webapp.patients.history_export`): date, exercise, score,
+    repetitions, repetitions passed, pain, each clinical angle's range in degrees (empty when the
+    run did not measure it) and a note; units in the column names."""
 
     renderer_classes = [JSONRenderer, CSVRenderer]
 
     @extend_schema(responses={(200, "text/csv"): OpenApiResponse(OpenApiTypes.STR)})
     def get(self, request: Request, pk) -> HttpResponse:
-        patient = audited_patient(request, pk)
-        response = HttpResponse(content_type="text/csv; charset=utf-8")
-        filename = f"history-{slugify(patient.display_name) or 'patient'}.csv"
-        response["Content-Disposition"] = f'attachment; filename="{filename}"'
-        writer = csv.writer(response)
-        writer.writerow(CSV_COLUMNS + ANGLE_COLUMNS)
-        for recording, result in analysed_recordings(patient):
-            writer.writerow(csv_row(recording, result))
-        return response
+        patient = get_patient_for_user(request, pk, audit=False)  # the export is the event
+        return history_csv_response(request, patient)
 
 
 def local_code(code: str, display: str) -> dict[str, Any]:

@@ -2,8 +2,10 @@
 whole seconds) and numbers rounded to what they can mean (a frame rate of 30.0003 is 30.0, a
 score 0..100 to 0.1, angles to 0.1°, timings to 0.1 ms).
 
-Rounding is by key, so the `analyse --json` object keeps its shape and every field; a float the
-table does not name keeps four decimals (ratios such as a relative area).
+Rounding is by key, for the answers built as plain dicts (progress points, the results-page
+data); a float the table does not name keeps four decimals (ratios such as a relative area). The
+analysis result itself is served as the typed result's JSON, at the pipeline's precision
+(`webapp.api.serializers.typed_json`).
 """
 
 from __future__ import annotations

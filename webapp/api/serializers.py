@@ -1,26 +1,36 @@
 """What the API answers, every object typed for the OpenAPI schema.
 
 Lists answer summaries (a recording's status, score, repetition and passed counts and links);
-the full `analyse --json` result is on the recording's own endpoint (or behind `?fields=result`).
-Datetimes are ISO 8601 in UTC with `Z`; numbers are rounded to what they mean
-(`webapp.api.numbers`).
+the full `analyse --json` result is on the recording's own endpoint (or behind `?fields=result`),
+as the typed result's JSON (`AnalysisSummary.to_json`, at the pipeline's precision) under a schema
+generated from the same dataclasses. Datetimes are ISO 8601 in UTC with `Z`; the other numbers
+are rounded to what they mean (`webapp.api.numbers`).
 """
 
 from __future__ import annotations
 
 import datetime
+from typing import Any
 
 from django.db import models
 from django.urls import reverse
 from drf_spectacular.utils import extend_schema_field
 from rest_framework import serializers
 
-from webapp.api.numbers import round_or_none, rounded, utc_iso
+from analysis.pipeline import AnalysisSummary
+from webapp.api.numbers import round_or_none, utc_iso
+from webapp.api.result_schema import RESULT_FIELD
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun, Recording
 
 RUN_STATES = ["queued", "running", "succeeded", "failed"]
+
+
+def typed_json(summary: dict[str, Any]) -> dict[str, Any]:
+    """A stored result as the API serves it: the typed result's JSON (`AnalysisSummary`), so
+    every answer has the generated schema's shape whatever the run stored."""
+    return AnalysisSummary.from_json(summary).to_json()
 
 
 class UTCDateTimeField(serializers.DateTimeField):
@@ -91,7 +101,8 @@ class RunSerializer(ApiModelSerializer):
         ]
 
 
-# The `analyse --json` object (CONTRACTS.md), for the schema; answers carry it as stored, rounded.
+# Parts of the result that other answers (progress, results-page data) describe; the result
+# itself is generated from its dataclasses (`webapp.api.result_schema`).
 class LandmarkSerializer(serializers.Serializer):
     frame = serializers.IntegerField()
     type = serializers.IntegerField()
@@ -109,53 +120,10 @@ class AngleRangeSerializer(serializers.Serializer):
     range = serializers.FloatField()
 
 
-class RepetitionSerializer(serializers.Serializer):
-    start = serializers.IntegerField()
-    end = serializers.IntegerField()
-    score = serializers.FloatField()
-    passed = serializers.BooleanField(required=False, allow_null=True)
-    guidance = GuidanceSerializer(many=True, required=False)
-    alignment_tau = serializers.FloatField(required=False, allow_null=True)
-    similarity = serializers.FloatField(required=False, allow_null=True)
-
-
 class AssessmentSerializer(serializers.Serializer):
     frame = serializers.IntegerField()
     type = serializers.IntegerField()
     levels = serializers.DictField(child=serializers.IntegerField())
-
-
-class FeedbackSerializer(serializers.Serializer):
-    frame = serializers.IntegerField()
-    text = serializers.CharField()
-
-
-class PeriodicSerializer(serializers.Serializer):
-    candidates = serializers.IntegerField()
-    removed = serializers.ListField(child=serializers.IntegerField())
-    inserted = serializers.ListField(child=serializers.IntegerField())
-
-
-class AnalysisResultSerializer(serializers.Serializer):
-    frames = serializers.IntegerField()
-    fps = serializers.FloatField()
-    landmarks = LandmarkSerializer(many=True)
-    repetitions = RepetitionSerializer(many=True)
-    score = serializers.FloatField()
-    assessment = AssessmentSerializer(many=True)
-    feedback = FeedbackSerializer(many=True)
-    timings_ms = serializers.DictField(child=serializers.FloatField())
-    periodic = PeriodicSerializer(required=False)
-    segmentation = serializers.CharField(required=False)
-    pass_threshold = serializers.FloatField(required=False, allow_null=True)
-    clinical_angles = serializers.DictField(child=AngleRangeSerializer(), required=False)
-    clinical_notes = serializers.DictField(
-        child=serializers.CharField(), required=False,
-        help_text="angle name -> why the recording does not measure it (plain words)",
-    )  # fmt: skip
-    gamma = serializers.DictField(child=serializers.FloatField(), required=False)
-    range_of_motion = serializers.DictField(child=serializers.FloatField(), required=False)
-    repetition_count = serializers.IntegerField(required=False)
 
 
 class RecordingLinksSerializer(serializers.Serializer):
@@ -203,6 +171,7 @@ class RecordingSerializer(ApiModelSerializer):
             "run",
             "suggested_exercise",
             "suggestion_distance",
+            "recognition",  # the worker's recognition of an upload without exercise
             "links",
         ]
 
@@ -219,10 +188,10 @@ class RecordingSerializer(ApiModelSerializer):
         run = self.latest_run(recording)
         return run.progress if run else 0
 
-    @extend_schema_field(AnalysisResultSerializer(allow_null=True))
+    @extend_schema_field(RESULT_FIELD)
     def get_result(self, recording: Recording) -> dict | None:
         run = self.latest_run(recording)
-        return rounded(run.summary) if run and run.status == "succeeded" else None
+        return typed_json(run.summary) if run and run.status == "succeeded" else None
 
     @extend_schema_field(RunSerializer(allow_null=True))
     def get_run(self, recording: Recording) -> dict | None:
@@ -272,10 +241,10 @@ class RecordingSummaryWithResultSerializer(RecordingSummarySerializer):
 
     result = serializers.SerializerMethodField()
 
-    @extend_schema_field(AnalysisResultSerializer(allow_null=True))
+    @extend_schema_field(RESULT_FIELD)
     def get_result(self, recording: Recording) -> dict | None:
         summary = getattr(recording, "run_summary", None)
-        return rounded(summary) if recording.run_status == "succeeded" and summary else None
+        return typed_json(summary) if recording.run_status == "succeeded" and summary else None
 
 
 class RecordingUploadSerializer(serializers.Serializer):

@@ -4,7 +4,7 @@ from rest_framework.permissions import IsAuthenticated
 
 from webapp.accounts import api as accounts_api
 from webapp.accounts.tokens import obtain_token
-from webapp.api import exports, prescriptions, views
+from webapp.api import exports, goals, notes, prescriptions, views
 from webapp.live.api import LiveSessionCreate
 
 urlpatterns = [
@@ -32,6 +32,7 @@ urlpatterns = [
         name="api-patient-history-csv",
     ),
     path("v1/patients/<uuid:pk>/fhir/", exports.PatientFHIR.as_view(), name="api-patient-fhir"),
+    path("v1/patients/<uuid:pk>/goals/", goals.PatientGoals.as_view(), name="api-patient-goals"),
     path("v1/exercises/", views.ExerciseList.as_view(), name="api-exercises"),
     path("v1/recordings/", views.RecordingCreate.as_view(), name="api-recordings"),
     path("v1/recordings/<uuid:pk>/", views.RecordingDetail.as_view(), name="api-recording"),
@@ -49,6 +50,11 @@ urlpatterns = [
         "v1/recordings/<uuid:pk>/confirm/",
         views.RecordingConfirm.as_view(),
         name="api-recording-confirm",
+    ),
+    path(
+        "v1/recordings/<uuid:pk>/notes/",
+        notes.RecordingNotes.as_view(),
+        name="api-recording-notes",
     ),
     path("v1/live-sessions/", LiveSessionCreate.as_view(), name="api-live-sessions"),
     path("v1/invitations/", accounts_api.InvitationCreate.as_view(), name="api-invitations"),

@@ -38,7 +38,7 @@ from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import MoveForm, UploadForm
 from webapp.recordings.recovery import check_analysable
 from webapp.recordings.results import result_data
-from webapp.recordings.uploads import check_skeleton, store_recording, suggest_exercise
+from webapp.recordings.uploads import check_skeleton, store_recording
 
 DATE_FILTERS = [
     OpenApiParameter("since", OpenApiTypes.DATE, description="only on or after this day"),
@@ -158,8 +158,7 @@ class RecordingCreate(APIView):
             user=request.user,
             pain_score=data["pain_score"],
             note=data["note"],
-            suggestion=suggest_exercise(form.parsed, data["exercise"], data["patient"]),
-        )
+        )  # without an exercise, a worker recognises it: GET shows `suggested_exercise` later
         body = RecordingSerializer(recording).data
         return Response(body, status=status.HTTP_201_CREATED)
 

@@ -2,9 +2,18 @@
 
 from __future__ import annotations
 
+import datetime
+
 from django.http import HttpRequest
+from django.utils import timezone
 
 from webapp.audit.models import AuditEvent
+from webapp.audit.words import describe
+
+PATH_LENGTH = AuditEvent._meta.get_field("path").max_length
+# A page's own fetches (the recording page's playback data) arrive within seconds of the page;
+# a reader who comes back later, or a script fetching them alone, leaves an event of its own.
+FOLD_WINDOW = datetime.timedelta(minutes=10)
 
 
 def client_ip(request: HttpRequest) -> str | None:
@@ -45,7 +54,28 @@ def record(request: HttpRequest, action: str, obj, patient_id=None) -> None:
         object_type=type(obj).__name__,
         object_id=str(obj.pk) if obj is not None else "",
         patient_id=patient_id,
-        path=request.get_full_path()[:300],
+        path=request.get_full_path()[:PATH_LENGTH],
         ip_address=client_ip(request),
         via=channel(request),
+        description=describe(obj),
     )
+
+
+def read_recently(request: HttpRequest, obj) -> bool:
+    """Whether this user, on this channel, read `obj` within `FOLD_WINDOW`."""
+    return AuditEvent.objects.filter(
+        user=request.user,
+        action=AuditEvent.Action.READ,
+        object_type=type(obj).__name__,
+        object_id=str(obj.pk),
+        via=channel(request),
+        at__gte=timezone.now() - FOLD_WINDOW,
+    ).exists()
+
+
+def record_page_part(request: HttpRequest, obj, patient_id=None) -> None:
+    """A read that a page makes for the object it shows (one page view, one event): folded into
+    the page's read of `obj` when there is one, an event of its own otherwise."""
+    if request.user.is_authenticated and read_recently(request, obj):
+        return
+    record(request, "read", obj, patient_id=patient_id)

@@ -9,6 +9,7 @@ from django.conf import settings
 from django.db import models
 
 from webapp.accounts.models import Clinic
+from webapp.audit.words import kind_words
 
 
 class AppendOnlyError(RuntimeError):
@@ -42,17 +43,24 @@ class AuditEvent(models.Model):
     object_type = models.CharField(max_length=50)
     object_id = models.CharField(max_length=64)
     patient_id = models.UUIDField(null=True, db_index=True)
-    path = models.CharField(max_length=300)
+    path = models.CharField(max_length=2000)  # the full path and query: exactly what was asked
     ip_address = models.GenericIPAddressField(null=True)
     at = models.DateTimeField(auto_now_add=True, db_index=True)
     # How the request came in: "web" (session) or "token <prefix>" (API token).
     via = models.CharField(max_length=40, blank=True)
+    # What was seen or changed, in words, as it was at the time (`webapp.audit.words`).
+    description = models.CharField(max_length=300, blank=True)
 
     objects = AuditEventQuerySet.as_manager()
 
     class Meta:
         ordering = ["-at"]
         indexes = [models.Index(fields=["clinic", "-at"])]
+
+    @property
+    def what(self) -> str:
+        """The event's object in words (events written before `description` name its kind)."""
+        return self.description or kind_words(self.object_type)
 
     def save(self, *args, **kwargs):
         if self.pk is not None or not self._state.adding:

@@ -1,6 +1,6 @@
 """Which of a clinic's patients need a therapist's attention, and why.
 
-Four signals, each one query over the clinic (never one query per patient):
+Five signals, each one query over the clinic (never one query per patient):
 
 - a failed analysis: the newest run of a recent recording failed (the patient or the file may
   need help before the next session);
@@ -10,7 +10,10 @@ Four signals, each one query over the clinic (never one query per patient):
 - missed sessions: fewer than half the sessions a prescription asks for were done over the last
   two weeks (sessions counted as in `webapp.patients.adherence`: days with a recording);
 - pain: a recording of the last two weeks came with a pain score of PAIN_ATTENTION (6/10) or
-  more (the newest such recording per patient).
+  more (the newest such recording per patient);
+- goals: a goal not met by its date, or off track (`webapp.patients.goals` says when), read in
+  one query over the clinic's goals and one over their sessions (plus the adherence of the
+  patients with an adherence goal).
 
 Archived and deleted patients are left out: nobody is treating them.
 
@@ -38,6 +41,7 @@ from django.db.models.functions import RowNumber, TruncDate
 from django.utils import timezone
 
 from webapp.patients.adherence import prescribed_sessions
+from webapp.patients.goals import NOT_MET, attention_text, off_track_goals
 from webapp.patients.models import Prescription
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 
@@ -52,11 +56,12 @@ NEWEST_FIRST = (F("recording__uploaded_at").desc(), F("created_at").desc())
 PAIN_ATTENTION = 6  # of 10: from here on a therapist looks before the next session
 PAIN_WITHIN_DAYS = 14
 ROWS_PER_SIGNAL = 500  # caps each query; a clinic with more flags has bigger problems
+GOAL_URGENCY = {NOT_MET: 150.0}  # below missed sessions and falling scores; off track: 120
 
 
 @dataclass(frozen=True)
 class Reason:
-    kind: str  # "failed" | "falling" | "adherence" | "pain"
+    kind: str  # "failed" | "falling" | "adherence" | "pain" | "goal"
     text: str
     urgency: float  # higher first
     recording_id: Any = None  # the recording to open, when there is one
@@ -246,6 +251,18 @@ def reported_pain(
     return list(found.items())
 
 
+def goals_off_track(
+    clinic_id: Any, today: datetime.date, patient_id: Any = None
+) -> list[tuple[Any, Reason]]:
+    return [
+        (
+            status.goal.patient_id,
+            Reason("goal", attention_text(status), GOAL_URGENCY.get(status.state, 120.0)),
+        )
+        for status in off_track_goals(clinic_id, today, patient_id)[:ROWS_PER_SIGNAL]
+    ]
+
+
 def session_days(
     clinic_id: Any, first: datetime.date, last: datetime.date, patient_id: Any = None
 ) -> dict[tuple[Any, Any], int]:
@@ -269,7 +286,8 @@ def session_days(
 def patients_needing_attention(
     clinic_id: Any, now: datetime.datetime | None = None, patient_id: Any = None
 ) -> list[Attention]:
-    """Patients with at least one reason, the most urgent first (four queries in all).
+    """Patients with at least one reason, the most urgent first (six queries in all, more
+    for patients with an adherence goal).
 
     Computed from the runs, recordings and prescriptions; the home page reads the stored copy
     (`webapp.dashboard.precompute`). `patient_id`: that patient only (the update after a run).
@@ -281,6 +299,7 @@ def patients_needing_attention(
     found += falling_scores(clinic_id, now, patient_id)
     found += missed_sessions(clinic_id, timezone.localdate(now), patient_id)
     found += reported_pain(clinic_id, now, patient_id)
+    found += goals_off_track(clinic_id, timezone.localdate(now), patient_id)
     by_patient: dict[Any, Attention] = {}
     for flagged, reason in found:
         by_patient.setdefault(flagged, Attention(flagged)).reasons.append(reason)

@@ -18,6 +18,9 @@ import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+from analysis.feedback import Comment, LandmarkAssessment
+from analysis.pipeline.results import AnalysisSummary, Guidance, KeyPose, RepetitionResult
+
 JOINTS = (
     "Head",
     "LeftCollar",
@@ -75,57 +78,63 @@ def feedback_sentence(rng: random.Random, pose: int) -> str:
     return rng.choice(OPENERS) + " And ".join(parts) + " " + " ".join(tips)
 
 
-def repetitions(rng: random.Random, count: int) -> list[dict]:
+def repetitions(rng: random.Random, count: int) -> tuple[RepetitionResult, ...]:
     reps = []
     for index in range(count):
         start = 15 + index * REP_FRAMES
+        end = start + REP_FRAMES - 1
+        said = rng.choice(("", "", "too fast", "incomplete"))
         reps.append(
-            {
-                "start": start,
-                "end": start + REP_FRAMES - 1,
-                "peak": start + REP_FRAMES // 2,
-                "score": round(rng.uniform(35, 98), 2),
-                "deviation": round(rng.uniform(0.005, 0.05), 5),
-                "reach": round(rng.uniform(0.7, 1.3), 3),
-                "tempo": round(rng.uniform(0.7, 1.5), 3),
-                "guidance": rng.choice(("", "", "slow down", "go further")),
-            }
+            RepetitionResult(
+                start=start,
+                end=end,
+                peak=start + REP_FRAMES // 2,
+                score=round(rng.uniform(35, 98), 2),
+                deviation=round(rng.uniform(0.005, 0.05), 5),
+                reach=round(rng.uniform(0.7, 1.3), 3),
+                tempo=round(rng.uniform(0.7, 1.5), 3),
+                guidance=(Guidance(said, (start, end)),) if said else (),
+            )
         )
-    return reps
+    return tuple(reps)
 
 
 def summary_without_score(rng: random.Random) -> dict:
-    """One analysed recording's summary (all fields but `score`)."""
+    """One analysed recording's summary (all fields but `score`), written by the typed result
+    (`AnalysisSummary.to_json`) so it has the stored shape whatever that becomes."""
     count = rng.randint(6, 12)
-    landmarks = [
-        {"frame": 15 + i * REP_FRAMES // 2, "type": 1 + i % 2} for i in range(2 * count + 1)
-    ]
-    assessment = [
-        {**mark, "levels": {j: rng.choice((1, 1, 1, 2, 2, 3, 4)) for j in JOINTS}}
+    landmarks = tuple(KeyPose(15 + i * REP_FRAMES // 2, 1 + i % 2) for i in range(2 * count + 1))
+    assessment = tuple(
+        LandmarkAssessment(
+            mark.frame, mark.type, {j: rng.choice((1, 1, 1, 2, 2, 3, 4)) for j in JOINTS}
+        )
         for mark in landmarks
-    ]
-    feedback = [
-        {"frame": mark["frame"], "text": feedback_sentence(rng, mark["type"])}
+    )
+    feedback = tuple(
+        Comment(mark.frame, feedback_sentence(rng, mark.type))
         for mark in landmarks
         if rng.random() < 0.85
-    ]
-    return {
-        "frames": 30 + count * REP_FRAMES,
-        "fps": 30.0003,
-        "landmarks": landmarks,
-        "repetitions": repetitions(rng, count),
-        "assessment": assessment,
-        "feedback": feedback,
-        "gamma": {j: round(rng.uniform(0.2, 1.0), 4) for j in JOINTS},
-        "mirrored": rng.random() < 0.1,
-        "range_of_motion": {j: round(rng.uniform(10, 120), 2) for j in JOINTS},
-        "tempo": round(rng.uniform(0.8, 1.5), 3),
-        "repetition_count": count,
-        "timings_ms": {
+    )
+    summary = AnalysisSummary(
+        frames=30 + count * REP_FRAMES,
+        fps=30.0003,
+        landmarks=landmarks,
+        repetitions=repetitions(rng, count),
+        score=None,
+        assessment=assessment,
+        feedback=feedback,
+        gamma={j: round(rng.uniform(0.2, 1.0), 4) for j in JOINTS},
+        mirrored=rng.random() < 0.1,
+        range_of_motion={j: round(rng.uniform(10, 120), 2) for j in JOINTS},
+        tempo=round(rng.uniform(0.8, 1.5), 3),
+        timings_ms={
             stage: round(rng.uniform(1, 130), 3)
             for stage in ("prepare", "repetitions", "scores", "assessment", "feedback", "playback")
         },
-    }
+    )
+    data = summary.to_json()
+    del data["score"]  # each run writes its own (`summary_tails`)
+    return data
 
 
 def summary_tails(seed: int, count: int = 256) -> list[str]:

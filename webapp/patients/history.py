@@ -1,21 +1,17 @@
-"""Progress JSON for the charts and the CSV export of a patient's history."""
+"""Progress JSON for the charts and the patient page's link to the history CSV."""
 
 from __future__ import annotations
 
-import csv
 import json
 
 from django.contrib.auth.decorators import login_required
 from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.utils.dateparse import parse_date
-from django.utils.text import slugify
 
 from webapp.accounts.permissions import get_patient_for_user
-from webapp.audit import log
-from webapp.patients.progress import patient_progress, progress_points_json
+from webapp.patients.history_export import history_csv_response
+from webapp.patients.progress import progress_points_json
 from webapp.recordings.words import body_part
-
-CSV_COLUMNS = ["date", "exercise_name", "score", "repetitions", "pain_score", "recording", "run"]
 
 
 @login_required
@@ -46,17 +42,6 @@ def date_arg(request: HttpRequest, name: str):
 
 @login_required
 def history_csv(request: HttpRequest, pk) -> HttpResponse:
-    patient = get_patient_for_user(request, pk, audit=False)
-    log.record(request, "export", patient, patient_id=patient.pk)
-    response = HttpResponse(content_type="text/csv; charset=utf-8")
-    filename = f"history-{slugify(patient.display_name) or 'patient'}.csv"
-    response["Content-Disposition"] = f'attachment; filename="{filename}"'
-    writer = csv.writer(response)
-    joints = sorted({j for p in patient_progress(patient) for j in p["range_of_motion"]})
-    writer.writerow(CSV_COLUMNS + [f"rom_{j}" for j in joints] + [f"gamma_{j}" for j in joints])
-    for point in patient_progress(patient):
-        row = [point[c] for c in CSV_COLUMNS]
-        row += [point["range_of_motion"].get(j, "") for j in joints]
-        row += [point["gamma"].get(j, "") for j in joints]
-        writer.writerow(row)
-    return response
+    """The same file as the API's history.csv (`webapp.patients.history_export`)."""
+    patient = get_patient_for_user(request, pk, audit=False)  # the export is the event
+    return history_csv_response(request, patient)

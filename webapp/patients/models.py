@@ -174,3 +174,28 @@ class PerformanceLevel(models.Model):
                 fields=["patient", "exercise", "joint"], name="one_level_per_joint"
             )
         ]
+
+
+class Goal(models.Model):
+    """A target the therapist sets for one exercise of a patient, to reach by a date.
+
+    `measure` is a clinical angle name (`analysis.clinical.ANGLE_NAMES`: the angle's range of
+    motion in degrees), "score" (0–100) or "adherence" (% of prescribed sessions done over the
+    last four weeks). `webapp.patients.goals` says how a goal is judged met, on or off track.
+    """
+
+    id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
+    patient = models.ForeignKey(Patient, on_delete=models.CASCADE, related_name="goals")
+    exercise = models.ForeignKey(
+        "exercises.Exercise", on_delete=models.PROTECT, related_name="goals"
+    )
+    measure = models.CharField(max_length=60)
+    target = models.FloatField()
+    by = models.DateField()
+    created_by = models.ForeignKey(
+        settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True, related_name="+"
+    )
+    created_at = models.DateTimeField(auto_now_add=True)
+
+    class Meta:
+        ordering = ["by", "created_at"]

@@ -1,6 +1,6 @@
 from django.urls import path
 
-from webapp.patients import history, views
+from webapp.patients import compare, goal_views, history, views
 
 app_name = "patients"
 
@@ -13,4 +13,6 @@ urlpatterns = [
     path("<uuid:pk>/prescriptions/new/", views.prescription_create, name="prescribe"),
     path("<uuid:pk>/progress.json", history.progress_json, name="progress"),
     path("<uuid:pk>/history.csv", history.history_csv, name="history-csv"),
+    path("<uuid:pk>/goals/", goal_views.add, name="add-goal"),
+    path("<uuid:pk>/compare/", compare.compare, name="compare"),
 ]

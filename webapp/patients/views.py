@@ -14,6 +14,8 @@ from webapp.accounts.models import Role
 from webapp.accounts.permissions import get_patient_for_user, require_staff, visible_patients
 from webapp.patients.adherence import DaysWithData, patient_adherence
 from webapp.patients.forms import PatientForm, PrescriptionForm
+from webapp.patients.goal_views import goal_form
+from webapp.patients.goals import patient_goal_statuses
 from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun
 
@@ -55,7 +57,10 @@ def patient_detail(request: HttpRequest, pk) -> HttpResponse:
         "recordings": recordings_page(patient, request.GET.get("recordings_page")),
         "levels": patient.levels.select_related("exercise").order_by("exercise__name", "joint"),
         "can_invite": patient.user_id is None and may_invite(request.user, Role.PATIENT, patient),
+        "goals": patient_goal_statuses(patient),
     }
+    if request.user.is_staff_member:
+        context["goal_form"] = goal_form(request)
     return render(request, "patients/detail.html", context)
 
 

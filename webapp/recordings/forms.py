@@ -10,6 +10,7 @@ from webapp.accounts.permissions import visible_exercises, visible_patients
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings.models import Recording
+from webapp.recordings.prescribed import prescribed_exercises
 from webapp.recordings.recovery import analysable, check_analysable, check_move
 from webapp.recordings.uploads import (
     ParsedUpload,
@@ -94,7 +95,7 @@ def upload_choices(user: User) -> dict[str, Any]:
     own = patients.first()
     if own is None:
         return {"patients": patients, "exercises": exercises.none(), "own_patient": None}
-    prescribed = exercises.filter(prescriptions__patient=own).distinct()
+    prescribed = prescribed_exercises(own, exercises)  # current prescriptions only
     return {"patients": patients, "exercises": prescribed, "own_patient": own}
 
 

@@ -34,6 +34,16 @@ class LiveRecordingManager(models.Manager):
         )
 
 
+class RecognitionState(models.TextChoices):
+    """Where the worker's recognition of an upload's exercise stands (NONE: never asked)."""
+
+    NONE = "", "Not asked"
+    QUEUED = "queued", "Queued"
+    RUNNING = "running", "Running"
+    DONE = "done", "Done"
+    FAILED = "failed", "Failed"
+
+
 class Recording(models.Model):
     id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
     clinic = models.ForeignKey(Clinic, on_delete=models.PROTECT, related_name="recordings")
@@ -66,6 +76,12 @@ class Recording(models.Model):
         "exercises.Exercise", on_delete=models.SET_NULL, null=True, blank=True, related_name="+"
     )
     suggestion_distance = models.FloatField(null=True, blank=True)
+    # Recognising the exercise of an upload without one runs in a worker (workers/recognition.py):
+    # the upload answers at once and the recording page follows these two fields.
+    recognition = models.CharField(
+        max_length=8, choices=RecognitionState.choices, default=RecognitionState.NONE, blank=True
+    )
+    recognition_progress = models.PositiveSmallIntegerField(default=0)
     # Set when the stored file no longer matches `checksum` (or is missing) on a read.
     damaged_at = models.DateTimeField(null=True, blank=True)
     damage = models.CharField(max_length=300, blank=True)
@@ -246,3 +262,18 @@ class RepetitionLabel(models.Model):
         constraints = [
             models.UniqueConstraint(fields=["run", "index"], name="one_label_per_repetition")
         ]
+
+
+class RecordingNote(models.Model):
+    """A therapist's clinical note on one recording (shown on its page, in its PDF, in the API)."""
+
+    id = models.UUIDField(primary_key=True, default=uuid.uuid4, editable=False)
+    recording = models.ForeignKey(Recording, on_delete=models.CASCADE, related_name="notes")
+    author = models.ForeignKey(
+        settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True, related_name="+"
+    )
+    text = models.TextField()
+    created_at = models.DateTimeField(auto_now_add=True)
+
+    class Meta:
+        ordering = ["created_at"]

@@ -7,8 +7,8 @@ import logging
 from django.db import transaction
 from kombu.exceptions import OperationalError as BrokerUnavailable
 
-from webapp.recordings.models import AnalysisRun, Recording
-from workers.tasks import analyse_recording
+from webapp.recordings.models import AnalysisRun, RecognitionState, Recording
+from workers.tasks import analyse_recording, recognise_exercise
 
 log = logging.getLogger(__name__)
 
@@ -49,3 +49,31 @@ def confirm_exercise(recording: Recording, exercise) -> AnalysisRun | None:
             return None
         recording.exercise = exercise
         return start_analysis(recording)
+
+
+def start_recognition(recording: Recording) -> None:
+    """Ask a worker which exercise a recording uploaded without one shows, once the transaction
+    commits (nothing is analysed until someone confirms). A recognition already queued or
+    running is not asked twice."""
+    asked = Recording.objects.filter(pk=recording.pk, exercise__isnull=True).exclude(
+        recognition__in=[RecognitionState.QUEUED, RecognitionState.RUNNING]
+    )
+    if asked.update(recognition=RecognitionState.QUEUED, recognition_progress=0) != 1:
+        return
+    recording.recognition, recording.recognition_progress = RecognitionState.QUEUED, 0
+    recording_id = str(recording.pk)
+    transaction.on_commit(lambda: enqueue_recognition(recording_id))
+
+
+def enqueue_recognition(recording_id: str) -> None:
+    """Hand the recognition to the broker (the analyses queue); if it is down, the recording page
+    says the exercise could not be recognised and offers the choice at once."""
+    try:
+        recognise_exercise.delay(recording_id)
+    except (BrokerUnavailable, OSError):
+        log.warning(
+            "broker unavailable; recording %s is not recognised", recording_id, exc_info=True
+        )
+        Recording.objects.filter(pk=recording_id, recognition=RecognitionState.QUEUED).update(
+            recognition=RecognitionState.FAILED
+        )

@@ -10,6 +10,7 @@ question on the few candidates the question concerns, which takes milliseconds.
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -61,17 +62,38 @@ def fitted(features: list[np.ndarray], labels: list[Any]) -> MotionRetriever:
     return MotionRetriever(n_components=n_components, frame_rate=FRAME_RATE).fit(features, labels)
 
 
-def identify_exercise(motion: Motion, exercises) -> Guess | None:
-    """The clinic exercise whose tutor or confirmed recordings are nearest (1-NN), or None."""
+def labelled_examples(candidates: list[Exercise]) -> list[tuple[Exercise | Recording, str]]:
+    """Each candidate's tutor, then their newest confirmed recordings, with its exercise id."""
+    examples: list[tuple[Exercise | Recording, str]] = [(e, str(e.pk)) for e in candidates]
+    confirmed = Recording.objects.filter(exercise__in=candidates).order_by("-uploaded_at")
+    examples += [(r, str(r.exercise_id)) for r in confirmed[: settings.RETRIEVAL_MAX_CANDIDATES]]
+    return examples
+
+
+def example_features(example: Exercise | Recording) -> np.ndarray:
+    if isinstance(example, Exercise):
+        return exercise_features(example)
+    return file_features(example.file, example.checksum)
+
+
+def identify_exercise(
+    motion: Motion, exercises, progress: Callable[[float], None] | None = None
+) -> Guess | None:
+    """The clinic exercise whose tutor or confirmed recordings are nearest (1-NN), or None.
+
+    `progress(fraction)` hears how far the reading of the examples' features is (0..1): on a
+    cold cache that is nearly all the time this takes."""
     candidates = list(exercises.filter(archived_at__isnull=True))
     if not candidates:
         return None
-    features = [exercise_features(e) for e in candidates]
-    labels: list[Any] = [str(e.pk) for e in candidates]
-    confirmed = Recording.objects.filter(exercise__in=candidates).order_by("-uploaded_at")
-    for recording in confirmed[: settings.RETRIEVAL_MAX_CANDIDATES]:
-        features.append(file_features(recording.file, recording.checksum))
-        labels.append(str(recording.exercise_id))
+    examples = labelled_examples(candidates)
+    features: list[np.ndarray] = []
+    labels: list[Any] = []
+    for done, (example, label) in enumerate(examples, start=1):
+        features.append(example_features(example))
+        labels.append(label)
+        if progress is not None:
+            progress(done / len(examples))
     retriever = fitted(features, labels)
     index, distance = retriever.most_similar(motion_features(motion), k=1)[0]
     by_id = {str(e.pk): e for e in candidates}

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import gzip
 import hashlib
-import logging
 from dataclasses import dataclass
 
 from django.conf import settings
@@ -16,11 +15,9 @@ from django.core.exceptions import ValidationError
 from django.core.files.base import ContentFile
 from django.core.files.uploadedfile import UploadedFile
 from django.db import transaction
-from django.db.models import Q
 from django.utils import timezone
 
 from analysis.bvh import (
-    AnalysisInputError,
     BVHError,
     ImplausibleRecordingError,
     Limits,
@@ -37,7 +34,6 @@ from webapp.recordings import services
 from webapp.recordings.models import AnalysisRun, Recording
 from webapp.recordings.words import file_problem
 
-log = logging.getLogger(__name__)
 MIN_FRAMES = 10
 ACCEPTED_SUFFIXES = (".bvh", ".bvh.gz")
 # Caps for untrusted files, far above a clinical recording (a 30-minute UI-PRMD session at 30 fps
@@ -157,9 +153,9 @@ def store_recording(
     user: User,
     pain_score: int | None = None,
     note: str = "",
-    suggestion=None,
 ) -> tuple[Recording, AnalysisRun | None]:
-    """Store the recording, its file and its first run in one transaction.
+    """Store the recording, its file and its first run in one transaction; without an exercise,
+    a worker is asked to recognise it instead (`services.start_recognition`, after the commit).
 
     The file is written before the row commits; if the transaction fails it is deleted again, so a
     failed upload leaves no orphan file behind. The same file again while its first upload
@@ -168,22 +164,18 @@ def store_recording(
     pending = pending_upload(patient, parsed.checksum)
     if pending is not None:
         return reuse_pending(
-            pending, exercise=exercise, user=user, pain_score=pain_score, note=note,
-            suggestion=suggestion,
-        )  # fmt: skip
+            pending, exercise=exercise, user=user, pain_score=pain_score, note=note
+        )
     recording = new_recording(
         parsed, patient=patient, exercise=exercise, user=user, pain_score=pain_score, note=note
     )
-    if suggestion is not None:
-        recording.suggested_exercise = suggestion.exercise
-        recording.suggestion_distance = suggestion.distance
     suffix = ".bvh.gz" if parsed.content[:2] == b"\x1f\x8b" else ".bvh"
     try:
         with transaction.atomic():
             recording.file.save(f"{recording.pk}{suffix}", ContentFile(parsed.content), save=False)
             recording.save()
             Patient.objects.filter(pk=patient.pk).update(last_activity_at=timezone.now())
-            run = services.start_analysis(recording) if exercise is not None else None
+            run = start_first_step(recording)
     except Exception:
         if recording.file.name:
             recording.file.storage.delete(recording.file.name)
@@ -191,22 +183,29 @@ def store_recording(
     return recording, run
 
 
+def start_first_step(recording: Recording) -> AnalysisRun | None:
+    """Its analysis when the exercise is named, else the worker's recognition of the exercise."""
+    if recording.exercise is not None:
+        return services.start_analysis(recording)
+    services.start_recognition(recording)
+    return None
+
+
 def reuse_pending(
-    recording: Recording, *, exercise, user, pain_score, note, suggestion
+    recording: Recording, *, exercise, user, pain_score, note
 ) -> tuple[Recording, AnalysisRun | None]:
     """The uploader's new answers on the waiting upload (its file is the same bytes), and its
-    analysis started when an exercise is now named."""
+    analysis started when an exercise is now named (else its recognition, unless under way)."""
     recording.uploaded_by, recording.uploaded_at = user, timezone.now()
     recording.pain_score, recording.note = pain_score, note
-    if suggestion is not None:
-        recording.suggested_exercise = suggestion.exercise
-        recording.suggestion_distance = suggestion.distance
     fields = ["uploaded_by", "uploaded_at", "pain_score", "note"]
-    fields += ["suggested_exercise", "suggestion_distance"]
     with transaction.atomic():
         recording.save(update_fields=fields)
         Patient.objects.filter(pk=recording.patient_id).update(last_activity_at=timezone.now())
-        run = services.confirm_exercise(recording, exercise) if exercise is not None else None
+        if exercise is None:
+            services.start_recognition(recording)
+            return recording, None
+        run = services.confirm_exercise(recording, exercise)
     return recording, run
 
 
@@ -227,24 +226,3 @@ def new_recording(parsed: ParsedUpload, *, patient, exercise, user, pain_score, 
         note=note,
         uploaded_by=user,
     )
-
-
-def suggest_exercise(parsed: ParsedUpload, exercise: Exercise | None, patient: Patient):
-    """Paper 002's guess of the exercise when the upload names none (None when it does)."""
-    from webapp.recordings.similar import identify_exercise
-
-    if exercise is not None:
-        return None
-    candidates = Exercise.objects.filter(clinic_id=patient.clinic_id)
-    today = timezone.localdate()
-    prescribed = candidates.filter(
-        Q(prescriptions__end_date__isnull=True) | Q(prescriptions__end_date__gte=today),
-        prescriptions__patient=patient,
-    ).distinct()
-    # A patient's prescriptions are the likeliest answers; fall back to the whole clinic.
-    try:
-        return identify_exercise(parsed.motion, prescribed if prescribed.exists() else candidates)
-    except (AnalysisInputError, ValueError):
-        # An unusual rig (no feet, say) cannot be recognised; the uploader then chooses.
-        log.info("could not recognise the exercise of an upload", exc_info=True)
-        return None

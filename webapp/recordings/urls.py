@@ -1,6 +1,6 @@
 from django.urls import path
 
-from webapp.recordings import recovery_views, views
+from webapp.recordings import notes, recognition, recovery_views, views
 
 app_name = "recordings"
 
@@ -10,10 +10,11 @@ urlpatterns = [
     path("<uuid:pk>/status/", views.status, name="status"),
     path("<uuid:pk>/rerun/", views.rerun, name="rerun"),
     path("<uuid:pk>/result.json", views.result, name="result"),
-    path("<uuid:pk>/confirm/", views.confirm, name="confirm"),
+    path("<uuid:pk>/confirm/", recognition.confirm, name="confirm"),
     path("<uuid:pk>/corrections/", views.corrections, name="corrections"),
     path("<uuid:pk>/move/", recovery_views.move, name="move"),
     path("<uuid:pk>/delete/", recovery_views.delete, name="delete"),
     path("<uuid:pk>/restore/", recovery_views.restore, name="restore"),
     path("deleted/", recovery_views.deleted, name="deleted"),
+    path("<uuid:pk>/notes/", notes.add, name="add-note"),
 ]

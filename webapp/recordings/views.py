@@ -2,7 +2,6 @@ from __future__ import annotations
 
 import json
 
-from django import forms
 from django.contrib import messages
 from django.contrib.auth.decorators import login_required
 from django.core.exceptions import ValidationError
@@ -11,20 +10,18 @@ from django.shortcuts import redirect, render
 from django.views.decorators.cache import never_cache
 from django.views.decorators.http import require_POST
 
-from analysis.bvh import read
 from webapp.accounts.permissions import (
     get_recording_for_user,
     require_staff,
-    visible_exercises,
 )
 from webapp.recordings import recovery_views, services, warmup
 from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import UploadForm, upload_choices
 from webapp.recordings.models import AnalysisRun
-from webapp.recordings.recovery import analysable
+from webapp.recordings.notes import NoteForm, notes_of
+from webapp.recordings.recognition import recognition_status
 from webapp.recordings.results import result_data
-from webapp.recordings.storage import DamagedRecordingError, read_verified
-from webapp.recordings.uploads import check_skeleton, store_recording, suggest_exercise
+from webapp.recordings.uploads import store_recording
 
 
 def upload_form(request: HttpRequest) -> UploadForm:
@@ -47,11 +44,10 @@ def upload(request: HttpRequest) -> HttpResponse:
             user=request.user,
             pain_score=data["pain_score"],
             note=data["note"],
-            suggestion=suggest_exercise(form.parsed, data["exercise"], data["patient"]),
         )
-        if recording.exercise_id is None:
-            messages.info(request, "Recording uploaded. Please confirm which exercise it is.")
-            return redirect("recordings:confirm", pk=recording.pk)
+        if recording.exercise_id is None:  # recognised by a worker; confirmed on its page
+            messages.info(request, "Recording uploaded. Please confirm which exercise it is below.")
+            return redirect("recordings:detail", pk=recording.pk)
         messages.success(
             request, "Recording uploaded. The analysis runs in the background: progress below."
         )
@@ -66,8 +62,10 @@ def detail(request: HttpRequest, pk) -> HttpResponse:
     recording = get_recording_for_user(request, pk)
     runs = list(recording.runs.all())
     context = {"recording": recording, "run": runs[0] if runs else None, "runs": runs}
+    context["notes"] = notes_of(recording)
     if request.user.is_staff_member:
         context["move_form"] = recovery_views.move_form(request, recording)
+        context["note_form"] = NoteForm()
     return render(request, "recordings/detail.html", context)
 
 
@@ -87,7 +85,10 @@ def run_status(run: AnalysisRun | None) -> dict:
 @login_required
 def status(request: HttpRequest, pk) -> JsonResponse:
     recording = get_recording_for_user(request, pk, audit=False)  # polled every second
-    return JsonResponse(run_status(recording.runs.first()))
+    run = recording.runs.first()
+    if run is None:  # no analysis yet: how far the worker's recognition of the exercise is
+        return JsonResponse(recognition_status(recording))
+    return JsonResponse(run_status(run))
 
 
 @login_required
@@ -109,44 +110,6 @@ def result(request: HttpRequest, pk) -> JsonResponse:
     """Everything the results page shows, as JSON (charts and viewer read it)."""
     recording = get_recording_for_user(request, pk)
     return JsonResponse(result_data(recording, recording.runs.first(), request.user))
-
-
-class ConfirmForm(forms.Form):
-    exercise = forms.ModelChoiceField(queryset=None, empty_label=None)
-
-    def __init__(self, *args, recording, exercises, **kwargs):
-        super().__init__(*args, **kwargs)
-        self.recording = recording
-        self.fields["exercise"].queryset = exercises
-
-    def clean_exercise(self):
-        exercise = self.cleaned_data["exercise"]
-        try:
-            content = read_verified(self.recording)
-        except DamagedRecordingError as error:
-            raise forms.ValidationError(str(error)) from error
-        check_skeleton(read(content), exercise)
-        return exercise
-
-
-@login_required
-def confirm(request: HttpRequest, pk) -> HttpResponse:
-    """Confirm (or correct) the exercise the system recognised, then analyse the recording."""
-    recording = get_recording_for_user(request, pk)
-    if recording.exercise_id is not None:
-        return redirect("recordings:detail", pk=recording.pk)
-    exercises = analysable(visible_exercises(request.user))
-    initial = {"exercise": recording.suggested_exercise_id}
-    form = ConfirmForm(
-        request.POST or None, initial=initial, recording=recording, exercises=exercises
-    )
-    if request.method == "POST" and form.is_valid():
-        services.confirm_exercise(recording, form.cleaned_data["exercise"])
-        messages.success(request, "Thank you. The analysis runs in the background: progress below.")
-        return redirect("recordings:detail", pk=recording.pk)
-    status = 400 if request.method == "POST" else 200
-    context = {"recording": recording, "form": form}
-    return render(request, "recordings/confirm.html", context, status=status)
 
 
 @never_cache

@@ -7,7 +7,9 @@ from typing import Any
 
 from django.utils import timezone
 
+from webapp.patients.goals import patient_goal_statuses
 from webapp.patients.progress import patient_progress
+from webapp.recordings.notes import note_lines
 from webapp.recordings.words import body_part, key_pose_name
 from webapp.reports import playback
 from webapp.reports.clinical import clinical_content
@@ -70,6 +72,7 @@ def recording_content(recording) -> dict[str, Any]:
             f"{recording.fps:.0f} frames per second · report made {timezone.now():%d %b %Y %H:%M}",
         ],
         "analysed": run is not None and run.result is not None,
+        "notes": note_lines(recording),
     }
     if not content["analysed"]:
         return content
@@ -139,4 +142,14 @@ def progress_content(patient, since: date | None, until: date | None) -> dict[st
         ],
         "score_series": series_by_exercise(points, "score"),
         "rom_series": rom_series(points),
+        "goals": goal_rows(patient),
     }
+
+
+def goal_rows(patient) -> list[list[str]]:
+    """Each goal (over all the patient's sessions, not only the report's period): exercise,
+    the goal in words, the latest value, and whether it is met or on track."""
+    return [
+        [found.goal.exercise.name, found.words, found.latest_words(), found.state_words]
+        for found in patient_goal_statuses(patient)
+    ]

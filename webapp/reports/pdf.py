@@ -135,7 +135,7 @@ def recording_pdf(content: dict[str, Any]) -> bytes:
     story.append(Spacer(1, 0.4 * cm))
     if not content.get("analysed"):
         story.append(paragraph("This recording has no analysis result yet."))
-        return build(story, content["title"])
+        return build(story + notes_flowables(content), content["title"])
     story.append(paragraph(f"Score {content['score']} / 100", "Heading2"))
     reps = content["repetitions"]
     story.append(
@@ -165,7 +165,29 @@ def recording_pdf(content: dict[str, Any]) -> bytes:
         story.append(table([["Body part", "Range (degrees)", "Level (0–1)"], *content["rom"]]))
         story.append(paragraph(LEVEL_HELP))
     story += clinical_flowables(content)
+    story += notes_flowables(content)
     return build(story, content["title"])
+
+
+def notes_flowables(content: dict[str, Any]) -> list[Any]:
+    """The recording's clinical notes, each signed and dated (nothing when there is none)."""
+    if not content.get("notes"):
+        return []
+    story: list[Any] = [paragraph("Clinical notes", "Heading2")]
+    for note in content["notes"]:
+        story.append(paragraph(f"{note['author']}, {note['date']}:", "Italic"))
+        story.append(paragraph(note["text"]))
+    return story
+
+
+def goals_flowables(content: dict[str, Any]) -> list[Any]:
+    """The patient's goals with their latest value and whether each is met or on track."""
+    if not content.get("goals"):
+        return []
+    head = ["Exercise", "Goal", "Latest", "Status"]
+    rows = [[small(cell) for cell in row] for row in content["goals"]]
+    widths = [3.2 * cm, 8.2 * cm, 2 * cm, 3.6 * cm]
+    return [paragraph("Goals", "Heading2"), table([head, *rows], widths=widths)]
 
 
 def progress_pdf(content: dict[str, Any]) -> bytes:
@@ -175,7 +197,7 @@ def progress_pdf(content: dict[str, Any]) -> bytes:
     rows = content["rows"]
     if not rows:
         story.append(paragraph("No analysed recordings in this period."))
-        return build(story, content["title"])
+        return build(story + goals_flowables(content), content["title"])
     story.append(line_chart(content["score_series"], "Score by session", "score (0–100)"))
     for exercise, series in content["rom_series"].items():
         if series:
@@ -184,4 +206,5 @@ def progress_pdf(content: dict[str, Any]) -> bytes:
     story.append(paragraph("Sessions", "Heading2"))
     head = ["Date", "Exercise", "Score (0–100)", "Repetitions", "Pain (0–10)"]
     story.append(table([head, *rows]))
+    story += goals_flowables(content)
     return build(story, content["title"])

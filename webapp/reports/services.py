@@ -10,6 +10,7 @@ import hashlib
 
 from django.core.files.storage import default_storage
 from django.db import transaction
+from django.utils import timezone
 
 from webapp.patients.progress import patient_progress
 from workers.tasks import make_report
@@ -17,11 +18,18 @@ from workers.tasks import make_report
 
 def recording_report_name(recording) -> str:
     run = recording.latest_succeeded_run()
-    return f"reports/recording-{recording.pk}-{run.pk if run else 'none'}.pdf"
+    notes = ",".join(str(pk) for pk in recording.notes.values_list("pk", flat=True))
+    # A new clinical note makes a new report, as a new run does.
+    suffix = f"-{hashlib.sha256(notes.encode()).hexdigest()[:12]}" if notes else ""
+    return f"reports/recording-{recording.pk}-{run.pk if run else 'none'}{suffix}.pdf"
 
 
 def progress_report_name(patient, since, until) -> str:
     runs = ",".join(p["run"] for p in patient_progress(patient, since=since, until=until))
+    # A goal set (it lists the goals) or a day passing (a goal's date) makes a new report too.
+    goals = ",".join(str(pk) for pk in patient.goals.values_list("pk", flat=True))
+    if goals:
+        runs += f"|{goals}|{timezone.localdate()}"
     digest = hashlib.sha256(runs.encode()).hexdigest()[:16]
     return f"reports/progress-{patient.pk}-{since or 'start'}-{until or 'now'}-{digest}.pdf"
 

@@ -93,14 +93,10 @@ def ticks(scale: _Scale) -> list[dict[str, Any]]:
     ]
 
 
-def repetitions(
-    result: AnalysisSummary, scale: _Scale, stored: list[Mapping[str, Any]]
-) -> list[dict[str, Any]]:
+def repetitions(result: AnalysisSummary, scale: _Scale) -> list[dict[str, Any]]:
     rows = []
     for i, rep in enumerate(result.repetitions):
-        raw = stored[i] if i < len(stored) else {}
-        passed = bool(raw["passed"]) if "passed" in raw else None
-        text = verdict(rep, result.pass_threshold, passed)
+        text = verdict(rep, result.pass_threshold, rep.passed)
         guidance = [
             scale.span(*g.frames, label=guidance_words(g.type), number=i + 1) for g in rep.guidance
         ]
@@ -124,8 +120,8 @@ def timeline(
     stored: Mapping[str, Any] | None = None,
     fallback_frames: int = 0,
 ) -> dict[str, Any]:
-    """Everything the timeline shows; ``stored``: the run's raw summary (tells old runs apart)."""
-    raw = dict(stored or {})
+    """Everything the timeline shows. ``stored`` (the run's raw summary) is no longer read: the
+    typed result tells a run that stored no verdict or segmentation apart (None)."""
     scale = _Scale(result.frames or fallback_frames, result.fps)
 
     def pose(mark: Any) -> dict[str, Any]:
@@ -156,11 +152,9 @@ def timeline(
         "candidates": result.periodic.candidates,
         "ticks": ticks(scale),
         "threshold": round(result.pass_threshold),
-        "repetitions": repetitions(result, scale, list(raw.get("repetitions") or [])),
-        # Older runs stored no segmentation: only an explicit "fallback" earns the note; a
-        # recording that does not show the exercise has no repetition to explain.
-        "fallback": raw.get("segmentation", result.segmentation if stored is None else "")
-        == "fallback"
-        and result.match.fits,
+        "repetitions": repetitions(result, scale),
+        # Older runs stored no segmentation (None): only an explicit "fallback" earns the note;
+        # a recording that does not show the exercise has no repetition to explain.
+        "fallback": result.segmentation == "fallback" and result.match.fits,
         "fallback_note": FALLBACK_NOTE,
     }

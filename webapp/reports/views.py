@@ -12,14 +12,18 @@ from django.http import FileResponse, HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import render
 
 from webapp.accounts.permissions import get_patient_for_user, get_recording_for_user
+from webapp.audit import log
 from webapp.patients.adherence import patient_adherence
+from webapp.patients.goals import chart_lines
 from webapp.reports import content, playback, services
 
 NOT_READY = "This recording has no playback data yet (the analysis has not succeeded)."
 
 
 def playback_or_none(request: HttpRequest, pk):
-    recording = get_recording_for_user(request, pk)  # playback data is patient data: audited
+    # Playback data is patient data: audited, as part of the recording page that fetches it.
+    recording = get_recording_for_user(request, pk, audit=False)
+    log.record_page_part(request, recording, patient_id=recording.patient_id)
     run = recording.latest_succeeded_run()
     if run is None:
         return None, None
@@ -109,6 +113,7 @@ def progress_page(request: HttpRequest, pk) -> HttpResponse:
         "prescriptions": prescriptions,
         "adherence": adherence,
         "days_with_data": days,
+        "goal_lines": chart_lines(patient),
     }
     return render(request, "reports/progress.html", context)
 

@@ -40,6 +40,17 @@
     return [{ type: "heatmap", z, x: weeks, y: ["Mon", "Tue", "Wed", "Thu", "Fri", "Sat", "Sun"], colorscale: [[0, "#f3f5f8"], [1, "#2da44e"]], zmin: 0, showscale: false, xgap: 2, ygap: 2 }];
   }
 
+  // Goals (dashed, labelled "goal" with the unit) from the first session shown to the goal's date.
+  function goalLines(chart, chosen, start) {
+    const box = document.getElementById("goal-lines");
+    const goals = box ? JSON.parse(box.textContent) : [];
+    return goals.filter((g) => g.chart === chart && (!chosen || g.exercise === chosen)).map((g) => ({
+      x: [start || g.by, g.by], y: [g.target, g.target], name: `${g.text} · ${g.exercise}`,
+      mode: "lines+text", text: ["", g.text], textposition: "top left", line: { dash: "dash", color: "#6e7781" },
+      hovertemplate: `${g.label}: ${g.text} by ${g.by}<extra></extra>`,
+    }));
+  }
+
   function draw() {
     const chosen = select.value;
     const points = chosen ? all.filter((p) => (p.exercise_name || "?") === chosen) : all;
@@ -48,7 +59,7 @@
     points.forEach((p) => { (byExercise[p.exercise_name || "?"] ??= []).push(p); });
     const scores = Object.entries(byExercise).map(([name, ps]) => ({ x: ps.map((p) => p.date.slice(0, 10)), y: ps.map((p) => p.score), name, mode: "lines+markers" }));
     const several = Object.keys(byExercise).length > 1;
-    Plotly.react("chart-score", scores, layout("score (0–100)", { yaxis: { title: { text: "score (0–100)" }, range: [0, 100] } }), config);
+    Plotly.react("chart-score", [...scores, ...goalLines("score", chosen, dates[0])], layout("score (0–100)", { yaxis: { title: { text: "score (0–100)" }, range: [0, 100] } }), config);
     Plotly.react("chart-rom", perJoint(points, "range_of_motion", several), layout("range of motion (degrees)"), config);
     Plotly.react("chart-gamma", perJoint(points, "gamma", several), layout("level (0–1)", { yaxis: { title: { text: "level (0–1)" }, range: [0, 1.05] } }), config);
     const reps = [{ type: "bar", x: dates, y: points.map((p) => p.repetitions), name: "repetitions", marker: { color: "#1f6feb" } }];
