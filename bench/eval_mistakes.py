@@ -8,8 +8,9 @@ and with one mistake made by editing its rotation channels:
   involved joints reach 55 % of their excursion; the truth of the amount is the loss in the
   patient's own excursion: the clinical angle's median range over the unmodified session's
   repetitions minus the modified one's.
-- ``arm down``: the moving arm (collar, upper arm, forearm, hand; the side whose upper arm turns
-  further in the session) kept in its first-frame pose (arm exercises only).
+- ``arm down``: the arm that does the exercise (collar, upper arm, forearm, hand; the side whose
+  shoulder angle ranges further in the session, `moving_arm`) kept in its first-frame pose (arm
+  exercises only).
 - ``lean``: the trunk (the spine's rotation, about the pelvis's left-right axis) leaned 20°
   forward in every frame; the truth is the change of the median trunk flexion. (These two are
   made by `tests/analysis/mistake_cases.py`.)
@@ -43,8 +44,7 @@ from typing import Any
 import numpy as np
 
 from analysis.bvh import Motion
-from analysis.kinematics import quaternions as quat
-from analysis.kinematics import rotations
+from analysis.clinical import angle_series
 from analysis.pipeline import AnalysisSummary, FittedModel, analyse, build_model
 from analysis.pipeline.gestures import Pace
 from analysis.pipeline.prepare import prepare
@@ -112,14 +112,16 @@ def cold_model(data: Path, exercise: str) -> FittedModel:
 
 
 def moving_arm(motion: Motion) -> str:
-    """ "Left" or "Right": the arm whose upper arm turns further from its first pose (the side a
-    subject did a one-arm exercise with)."""
-    q = quat.make_continuous(rotations(motion), axis=0)
-    names = list(motion.skeleton.names)
-    turn = {side: float(np.max(quat.angle_between(q[:1, names.index(f"{side}UpperArm")],
-                                                  q[:, names.index(f"{side}UpperArm")])))
-            for side in ("Left", "Right")}  # fmt: skip
-    return max(turn, key=lambda side: turn[side])
+    """ "Left" or "Right": the arm that does the exercise, the one whose shoulder angle (flexion,
+    abduction or elevation: `analysis.clinical`) ranges further over the session. (The upper
+    arm's local rotation picked m08's left arm, whose twist about its own axis is large while
+    the right arm does the shoulder extension.)"""
+    series = angle_series(motion)
+    reach = {side: max((float(np.nanpercentile(series[n], 95) - np.nanpercentile(series[n], 5))
+                        for n in series if n.startswith("shoulder_") and n.endswith(side.lower())),
+                       default=0.0)
+             for side in ("Left", "Right")}  # fmt: skip
+    return max(reach, key=lambda side: reach[side])
 
 
 def mistakes(motion: Motion, exercise: str) -> dict[str, tuple[Motion, float]]:

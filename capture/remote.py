@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import sys
 import threading
 import urllib.error
 import urllib.parse
@@ -81,6 +82,11 @@ def create_session(server: str, token: str, patient: str, exercise: str) -> dict
         raise StreamInputError(message) from None
     except (urllib.error.URLError, OSError) as error:
         raise StreamInputError(f"cannot reach {server}: {error}") from None
+
+
+def watch_url(server: str, session_id: str) -> str:
+    """Where a therapist of the clinic follows the session in a browser while it runs."""
+    return f"{server.rstrip('/')}/live/{session_id}/watch/"
 
 
 def ws_url(server: str, path: str) -> str:
@@ -230,9 +236,16 @@ def run_remote(
     source: Source,
     *,
     batch: int | None = None,
+    session: str | None = None,
 ) -> int:
-    """Create the session, stream, print the events; 0 on success."""
-    created = create_session(server, token, patient, exercise)
+    """Create the session (or join ``session``, one a therapist started on the patient's page),
+    stream, print the events; 0 on success. The watch page's address goes to stderr: stdout
+    holds only the JSON lines of CONTRACTS.md."""
+    if session is None:
+        created = create_session(server, token, patient, exercise)
+    else:
+        created = {"id": session, "ws": f"/ws/live/{urllib.parse.quote(session)}/"}
+    print(f"Watch this session at {watch_url(server, str(created['id']))}", file=sys.stderr)
     try:
         asyncio.run(stream_to(ws_url(server, str(created["ws"])), token, source, batch))
     except InvalidURI as error:

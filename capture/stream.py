@@ -3,13 +3,17 @@
     python -m analysis stream --model MODEL RECORDING.bvh[.gz] [--speed S] --json-lines
     python -m analysis stream RECORDING.bvh[.gz] --server http://HOST:PORT --token TOKEN \\
            --patient ID --exercise ID [--speed S] --json-lines
+    python -m analysis stream RECORDING.bvh[.gz] --server http://HOST:PORT --token TOKEN \\
+           --session ID [--speed S] --json-lines
 
 Sends a recording's frames at S times real time (``--speed max``: as fast as the receiver takes
 them) to an in-process on-line aligner (``--model``) or to a live session on the server. With
 ``--tcp HOST:PORT`` (and ``--header FILE.bvh`` for the skeleton) it relays a TCP stream of BVH
 frame lines instead, such as the one Perception Neuron's software broadcasts. Prints one JSON
 object per line: ``repetition`` and ``position`` events, then ``summary``. Exit 2 with a one-line
-message for bad input or a refused token.
+message for bad input or a refused token. With ``--session`` it streams into a live session a
+therapist started on the patient's page instead of creating one. With ``--server``, one line on
+stderr says where the session can be watched.
 """
 
 from __future__ import annotations
@@ -81,6 +85,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--token", help="API token (Authorization: Token ...)")
     p.add_argument("--patient", help="patient id")
     p.add_argument("--exercise", help="exercise id")
+    p.add_argument("--session", help="with --server: a live session started on the patient's page")
     p.add_argument("--speed", default="1", help="times real time, or 'max' (default 1)")
     p.add_argument("--tcp", help="relay BVH frame lines from HOST:PORT instead of a file")
     p.add_argument("--header", help="with --tcp: a BVH file giving the streamed skeleton")
@@ -104,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
     if bool(args.model) == bool(args.server):
         raise StreamInputError("give either --model MODEL or --server URL (not both)")
     if args.server:
-        missing = [f"--{n}" for n in ("token", "patient", "exercise") if not getattr(args, n)]
+        needed = ("token",) if getattr(args, "session", None) else ("token", "patient", "exercise")
+        missing = [f"--{n}" for n in needed if not getattr(args, n)]
         if missing:
             raise StreamInputError(f"--server needs {', '.join(missing)}")
     source = make_source(args)
@@ -113,4 +119,7 @@ def run(args: argparse.Namespace) -> int:
     batch = getattr(args, "batch", None)
     if batch is not None and batch < 1:
         raise StreamInputError(f"--batch must be 1 or more, got {batch}")
-    return run_remote(args.server, args.token, args.patient, args.exercise, source, batch=batch)
+    return run_remote(
+        args.server, args.token, args.patient, args.exercise, source,
+        batch=batch, session=getattr(args, "session", None),
+    )  # fmt: skip

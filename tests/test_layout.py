@@ -13,8 +13,8 @@ MAX_LINES = 400
 # The packages of analysis/, lowest first: each imports only packages before it in this list.
 # docs/ARCHITECTURE.md states the same order (test_architecture_states_the_checked_order).
 ANALYSIS_ORDER = (
-    "bvh", "kinematics", "dtw", "periodic", "landmarks", "online", "assessment", "clinical",
-    "feedback", "adjustment", "retrieval", "pipeline", "live",
+    "bvh", "kinematics", "sources", "dtw", "periodic", "landmarks", "online", "assessment",
+    "clinical", "feedback", "adjustment", "retrieval", "pipeline", "live",
 )  # fmt: skip
 # What the core may never import: the network, sockets and event loops (the capture client and
 # the server hold those), and the application packages above it.

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import logging
 import os
@@ -17,9 +18,11 @@ from django.core.files.base import ContentFile
 from django.db import InterfaceError, OperationalError, transaction
 
 from analysis import __version__ as code_version
-from analysis.bvh import AnalysisInputError, Limits, check_recording, read
+from analysis.bvh import AnalysisInputError, Limits, check_recording
 from analysis.pipeline import AnalysisResult, analyse
 from analysis.pipeline.gestures import Pace
+from analysis.sources import read_recording
+from analysis.sources.video import SUFFIXES as VIDEO_SUFFIXES
 from webapp.patients.models import PerformanceLevel
 from webapp.recordings.models import AnalysisRun, RunStatus
 from webapp.recordings.storage import read_verified
@@ -28,6 +31,8 @@ from workers.exercise_match import match_context
 from workers.limits import LIMIT_ERRORS, limit_reason
 
 log = logging.getLogger(__name__)
+# A video's frames go through the pose estimator first: the bar's first half (percent).
+VIDEO_READ_SHARE = 50
 GENERIC_FAILURE = (
     "The analysis failed unexpectedly. The team has the details; please try again later."
 )
@@ -93,7 +98,19 @@ def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
     if recording.exercise is None:
         raise AnalysisInputError("Choose the exercise of this recording before analysing it.")
     runs.report(str(run.pk), token, "loading", 2)
-    motion = read(read_verified(recording))
+    # Any capture source, by the stored file's real suffix (analysis.sources); a video's frames
+    # take the pose estimator a while, so reading it moves the bar to half way.
+    start, span = (
+        (VIDEO_READ_SHARE, 95 - VIDEO_READ_SHARE)
+        if recording.file.name.lower().endswith(VIDEO_SUFFIXES)
+        else (5, 90)
+    )
+
+    def on_reading(fraction: float) -> None:
+        runs.report(str(run.pk), token, "loading", 2 + int((start - 2) * fraction))
+
+    imported = read_recording(recording.file.name, read_verified(recording), progress=on_reading)
+    motion = imported.motion
     # Refused here, with its plain reason, before a model is built or anything allocated for it
     # (the model's frame rate and joints are its tutor's).
     limits = Limits.from_settings(settings)
@@ -103,14 +120,15 @@ def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
     history = previous_levels(recording)
 
     def on_progress(stage: str, fraction: float) -> None:
-        runs.report(str(run.pk), token, stage, 5 + int(90 * fraction))
+        runs.report(str(run.pk), token, stage, start + int(span * fraction))
         stage_delay()
 
     result = analyse(
         motion, model, history=history, on_progress=on_progress, limits=limits,
         match=match_context(recording.exercise), own_pace=earlier_pace(recording),
     )  # fmt: skip
-    return result, model_row
+    summary = dataclasses.replace(result.summary, source=imported.source)
+    return dataclasses.replace(result, summary=summary), model_row
 
 
 def stage_delay() -> None:

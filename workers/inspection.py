@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from analysis.bvh import read
+from analysis.sources import read_recording
 from webapp.recordings.models import Recording
 from webapp.recordings.storage import read_verified
 
 
 def inspect_recording(recording_id: str) -> dict[str, Any]:
     recording = Recording.all_objects.get(pk=recording_id)
-    motion = read(read_verified(recording))
+    motion = read_recording(recording.file.name, read_verified(recording)).motion
     facts = {
         "n_frames": int(motion.frames.shape[0]),
         "n_joints": len(motion.skeleton.names),

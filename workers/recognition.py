@@ -11,7 +11,8 @@ import logging
 
 from django.db.models import QuerySet
 
-from analysis.bvh import AnalysisInputError, read
+from analysis.bvh import AnalysisInputError
+from analysis.sources import read_recording
 from webapp.recordings.models import RecognitionState, Recording
 from webapp.recordings.prescribed import recognition_candidates
 from webapp.recordings.similar import identify_exercise
@@ -58,7 +59,7 @@ def recognise(recording_id: str) -> str:
 
 def best_guess(recording: Recording):
     """The nearest candidate exercise with its distance, or None when there is no candidate."""
-    motion = read(read_verified(recording))
+    motion = read_recording(recording.file.name, read_verified(recording)).motion
     report(str(recording.pk), READ_PROGRESS)
     span = FEATURES_PROGRESS - READ_PROGRESS
     shown = [READ_PROGRESS]

@@ -22,9 +22,9 @@ from django.db.models import Max, Q
 from django.utils import timezone
 
 from analysis.assessment.scoring import PASS_SCORE
-from analysis.bvh import read
 from analysis.online import BayesThreshold
 from analysis.pipeline import TrainingRecording
+from analysis.sources import read_recording
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from webapp.recordings.models import (
     AnalysisRun,
@@ -80,7 +80,7 @@ def training_recording(run: AnalysisRun) -> TrainingRecording:
     else:
         marks = run.result.landmarks if run.result else ()
         frames, types = [m.frame for m in marks], [m.type for m in marks]
-    motion = read(read_verified(run.recording))
+    motion = read_recording(run.recording.file.name, read_verified(run.recording)).motion
     return TrainingRecording(motion, tuple(frames), tuple(types), run_label(run))
 
 

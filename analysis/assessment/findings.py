@@ -8,8 +8,9 @@ against the tutor's, and each repetition's duration against the tutor's.
 Only what the exercise trains is corrected (issue 26): the *involved* angles are those the tutor
 moves at least `INVOLVED_SHARE` of its most-moved angle (and `MOVED_DEG`), one per joint (the
 shoulder's flexion, abduction and elevation are one arm: its elevation speaks for it when moved
-that much, else the angle the tutor moves most), narrowed to the joints the therapist ticked
-when any is among them (`involved_angles`). So a part is never both "as far as the
+that much, else the angle the tutor moves most), repeated alike from one repetition to the
+next (`unsteady_angles`: not the other arm a tutor swings), narrowed to the joints the therapist
+ticked when any is among them (`involved_angles`). So a part is never both "as far as the
 demonstration" and "too little", and a squat's arms, swung for balance, are not corrected.
 Compensations are the trunk's: its lean held through the movement (posture) and its movement
 where the tutor keeps it still; and those `analysis.assessment.compensations` measures from
@@ -77,6 +78,8 @@ MIN_SHARE = 0.4
 TIPS = ("good", "fast", "slow")  # said whether the recording passed or not
 SPREAD_FACTOR = 2.0  # times the tutor's own spread (SD of the range over its repetitions)
 TRUNK = ("trunk_flexion", "trunk_lateral_flexion")
+UNSTEADY_SHARE = 0.22  # a range wandering more between the tutor's repetitions: not trained
+ARM_JOINTS, LEG_JOINTS = ("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle")
 PREFERRED = "shoulder_elevation"  # speaks for the arm when moved: the arm's angle to the trunk
 KINDS = ("less", "more", "extra", "held", "held_back", "fast", "slow", "good")
 
@@ -100,12 +103,15 @@ class RepetitionMeasures:
 class Reference:
     """What the tutor does, per angle: the median range over its repetitions, that range's SD
     (``spread``), the median posture (``middles``), and the angles the exercise trains
-    (``involved``; None: `involved_angles` of the ranges)."""
+    (``involved``; None: `involved_angles` of the ranges); ``moved``: those the tutor moves
+    most whether it repeats them alike or not (`involved_angles` without the spread), which a
+    plain error is judged on (None: ``involved``)."""
 
     ranges: Mapping[str, float]
     spread: Mapping[str, float] = field(default_factory=dict)
     middles: Mapping[str, float] = field(default_factory=dict)
     involved: Collection[str] | None = None
+    moved: Collection[str] | None = None
 
 
 @dataclass(frozen=True)
@@ -156,12 +162,45 @@ def joint_of(name: str) -> str:
     return name.split("_", maxsplit=1)[0] + side
 
 
-def involved_angles(tutor: Mapping[str, float], ticked: Collection[str] = ()) -> set[str]:
+def limb_of(name: str) -> str:
+    """The limb an angle belongs to: "arm_left" for the shoulder's and elbow's left angles,
+    "leg_right" for the hip's, knee's and ankle's right ones, else its joint ("trunk")."""
+    joint, _, side = joint_of(name).partition("_")
+    kind = "arm" if joint in ARM_JOINTS else "leg" if joint in LEG_JOINTS else joint
+    return f"{kind}_{side}" if side else kind
+
+
+def unsteady_angles(tutor: Mapping[str, float], spread: Mapping[str, float]) -> set[str]:
+    """The angles the tutor moves far (past the involved limit) but differently in every
+    repetition: the range wanders (SD over the tutor's repetitions) by more than
+    `UNSTEADY_SHARE` of it; and every angle of a limb with no steadier one. A movement the
+    exercise trains is repeated as taught (UI-PRMD m08's tutor swings its other arm, elbow
+    93° ± 22°, while the trained arm repeats 66° ± 4°; m04's ankle wanders 63° ± 18° under a hip
+    that repeats 103° ± 3°). Never every moved angle: with no steady one, none is left out."""
+    top = max(tutor.values(), default=0.0)
+    limit = max(MOVED_DEG, INVOLVED_SHARE * top)
+    moved = {n for n, v in tutor.items() if v >= limit}
+    wander = {n for n in moved if spread.get(n, 0.0) > UNSTEADY_SHARE * tutor[n]}
+    if wander == moved:
+        return set()
+    steady_limbs = {limb_of(n) for n in moved - wander}
+    return wander | {n for n in tutor if limb_of(n) not in steady_limbs and limb_of(n) in
+                     {limb_of(m) for m in moved}}  # fmt: skip
+
+
+def involved_angles(
+    tutor: Mapping[str, float],
+    ticked: Collection[str] = (),
+    spread: Mapping[str, float] | None = None,
+) -> set[str]:
     """The angles the exercise trains (module docstring): moved by the tutor at least
     `INVOLVED_SHARE` of its most-moved angle, one per joint (the shoulder's elevation when it is
-    moved that much, else the joint's most-moved angle); ``ticked``: joints
-    ("knee_left", "shoulder_right", `joint_of`) the therapist chose, which narrow the set when
-    any of them is in it."""
+    moved that much, else the joint's most-moved angle), leaving out what the tutor does not
+    repeat the same in every repetition (`unsteady_angles`, from ``spread``: the SD of each
+    range over the tutor's repetitions); ``ticked``: joints ("knee_left", "shoulder_right",
+    `joint_of`) the therapist chose, which narrow the set when any of them is in it."""
+    unsteady = unsteady_angles(tutor, spread or {})
+    tutor = {n: v for n, v in tutor.items() if n not in unsteady}
     top = max(tutor.values(), default=0.0)
     limit = max(MOVED_DEG, INVOLVED_SHARE * top)
     best: dict[str, str] = {}
@@ -173,8 +212,13 @@ def involved_angles(tutor: Mapping[str, float], ticked: Collection[str] = ()) ->
 
 
 def main_angles(ref: Reference) -> set[str]:
-    """The involved angles the tutor moves at least `MAIN_SHARE` as far as its most-moved one."""
-    chosen = involved_angles(ref.ranges) if ref.involved is None else set(ref.involved)
+    """The angles a plain error is judged on: of ``ref.moved`` (else the involved ones), those
+    the tutor moves at least `MAIN_SHARE` as far as its most-moved one. Not narrowed to what the
+    tutor repeats alike: the cold-start distance score weighs every joint the tutor moves, and
+    judged on the repeated angles alone, UI-PRMD m08's repetition AUC fell from 0.886 to 0.853
+    and one more of its sessions disagreed with its label (docs/sections/eval_mistakes.md)."""
+    chosen = set(ref.moved) if ref.moved is not None else (
+        involved_angles(ref.ranges) if ref.involved is None else set(ref.involved))  # fmt: skip
     top = max((ref.ranges.get(n, 0.0) for n in chosen), default=0.0)
     return {n for n in chosen if ref.ranges.get(n, 0.0) >= MAIN_SHARE * top}
 

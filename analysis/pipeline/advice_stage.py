@@ -82,12 +82,14 @@ def tutor_reference(model: FittedModel) -> Reference:
     per_repetition = [angle_ranges(series, a, b) for a, b in bounds]
     ranges = [{k: v.range for k, v in rep.items()} for rep in per_repetition]
     middles = [{k: (v.min + v.max) / 2 for k, v in rep.items()} for rep in per_repetition]
-    involved = involved_angles(tutor_ranges(ranges), ticked_joints(model))
+    ticked, spread = ticked_joints(model), tutor_spreads(ranges)
+    involved = involved_angles(tutor_ranges(ranges), ticked, spread)
+    moved = involved_angles(tutor_ranges(ranges), ticked)  # a plain error's main angles
     for k, (extent, middle) in enumerate(_stretches(compensations(model.tutor), bounds)):
         ranges[k] = {**ranges[k], **extent}
         middles[k] = {**middles[k], **middle}
     return Reference(
-        tutor_ranges(ranges), tutor_spreads(ranges), tutor_ranges(middles), involved
+        tutor_ranges(ranges), tutor_spreads(ranges), tutor_ranges(middles), involved, moved
     )  # fmt: skip
 
 

@@ -15,6 +15,7 @@ from typing import Any
 from analysis.clinical.results import AngleRange, WorkspaceSummary
 from analysis.feedback import Comment, LandmarkAssessment
 from analysis.feedback.advice import Advice
+from analysis.sources.report import RecordingSource
 
 JSON = dict[str, Any]
 
@@ -241,6 +242,8 @@ class AnalysisSummary:
     advice: Advice = field(default_factory=Advice)
     # whether the recording shows the exercise at all; runs stored before always fitted
     match: ExerciseMatch = field(default_factory=ExerciseMatch)
+    # the kind of capture file and how many of its joints were used; runs stored before: BVH
+    source: RecordingSource = field(default_factory=RecordingSource)
 
     @property
     def repetition_count(self) -> int:
@@ -277,6 +280,7 @@ class AnalysisSummary:
             "workspace": {k: v.to_json() for k, v in self.workspace.items()},
             "advice": self.advice.to_json(),
             "match": self.match.to_json(),
+            "source": self.source.to_json(),
         }
 
     @classmethod
@@ -312,6 +316,7 @@ class AnalysisSummary:
             clinical_notes={str(k): str(v) for k, v in (data.get("clinical_notes") or {}).items()},
             advice=Advice.from_json(data.get("advice")),
             match=ExerciseMatch.from_json(data.get("match")),
+            source=RecordingSource.from_json(data.get("source")),
         )
 
 

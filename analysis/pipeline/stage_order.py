@@ -24,7 +24,7 @@ class Stage:
 ORDER: tuple[Stage, ...] = (
     Stage("prepare", "reading the recording", "analysis.pipeline.prepare"),
     Stage("landmark_identification", "finding key poses", "analysis.landmarks.identification"),
-    Stage("landmark_refining", "refining key poses", "analysis.landmarks.refining"),
+    Stage("landmark_refining", "placing key poses precisely", "analysis.landmarks.refining"),
     Stage("periodic_analysis", "checking the order of key poses", "analysis.pipeline.keyposes"),
     Stage("repetitions", "counting repetitions", "analysis.pipeline.keyposes"),
     Stage("match", "checking that the recording shows the exercise", "analysis.pipeline.match"),

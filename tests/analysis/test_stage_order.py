@@ -84,7 +84,7 @@ def test_the_timer_refuses_before_reporting_or_timing():
         pass
     with pytest.raises(StageOrderError), timer("prepare"):
         pass
-    assert reported == [("refining key poses", 2 / len(ORDER))]
+    assert reported == [("placing key poses precisely", 2 / len(ORDER))]
     assert list(timer.timings) == ["landmark_refining"]
     # a programming error, not bad input: the command line must not turn it into exit 2
     assert not issubclass(StageOrderError, ValueError)

@@ -3,11 +3,15 @@ page it shows opens from where the guide says, with the buttons it names, and ea
 the guide is taken here.
 
 With E2E_DOCS=1 (`make bench-browser`) the pictures are saved to docs/img/guide-*.png, where the
-guide and the /help/ page read them; otherwise they go to a temporary folder.
+guide and the /help/ page read them, and the demo's scores they show to
+docs/img/guide-figures.json; otherwise they go to a temporary folder, and the scores of the running
+demo must equal the saved ones: pictures showing scores the demo no longer has fail the test until
+they are taken again.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import re
 from pathlib import Path
@@ -19,6 +23,27 @@ from tests.e2e.conftest import log_in
 pytestmark = pytest.mark.e2e
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "docs" / "GUIDE.md"
+FIGURES = ROOT / "docs" / "img" / "guide-figures.json"
+
+
+def demo_scores() -> dict[str, list[int]]:
+    """Each analysed demo recording's score and its repetitions' scores, by file name: the
+    figures the guide's pictures show (home, patient, recording, progress pages)."""
+    from webapp.recordings.models import Recording
+
+    scores = {}
+    for recording in Recording.objects.all():
+        if run := recording.latest_succeeded_run():
+            result = run.result
+            reps = [round(rep.score) for rep in result.repetitions]
+            scores[recording.original_name] = [round(result.score), *reps]
+    return dict(sorted(scores.items()))
+
+
+def shown_scores(page) -> list[int]:
+    """The recording page's score and the score column of its repetition table."""
+    cells = page.locator("#repetitions tbody tr td:nth-child(3)").all_inner_texts()
+    return [int(page.locator(".score strong").inner_text()), *(int(c) for c in cells)]
 
 
 def guide_pictures() -> list[str]:
@@ -90,6 +115,8 @@ def test_the_guide_walks_through_the_demo_clinic(page, live_server, demo, shots)
     page.wait_for_selector("#viewer[data-ready='1']")
     assert re.search(r"Score \d+ / 100", page.locator(".score").inner_text())
     assert page.locator("#repetitions tbody tr").count() >= 1
+    # The picture shows the demo's own figures for this recording.
+    assert shown_scores(page) == demo_scores()[newest.original_name]
     snap(page, shots, "guide-recording.png", taken)
     page.locator("#viewer").scroll_into_view_if_needed()
     page.locator("#viewer").screenshot(path=str(shots / "guide-playback.png"))
@@ -111,3 +138,7 @@ def test_the_guide_walks_through_the_demo_clinic(page, live_server, demo, shots)
         assert loaded, picture.get_attribute("src")
     for name in taken:
         assert (shots / name).stat().st_size > 10_000, name
+    if os.environ.get("E2E_DOCS"):
+        FIGURES.write_text(json.dumps({"scores": demo_scores()}, indent=1) + "\n")
+    saved = json.loads(FIGURES.read_text())["scores"]
+    assert saved == demo_scores(), "the guide's pictures show other scores: `make bench-browser`"

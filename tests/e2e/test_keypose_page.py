@@ -88,7 +88,9 @@ def test_key_pose_page_walk(page, live_server, annotator):
 
     # Each checkbox sits on the line of its own name.
     rows = page.locator("#joints label")
-    assert rows.count() == len(data["joints"])
+    assert rows.count() == len(data["body_parts"])
+    names = [rows.nth(i).inner_text().strip() for i in range(rows.count())]
+    assert len(set(names)) == len(names), "each body part is offered once"
     for i in (0, rows.count() // 2, rows.count() - 1):
         row, tick = rows.nth(i).bounding_box(), rows.nth(i).locator("input").bounding_box()
         assert (

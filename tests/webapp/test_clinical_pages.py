@@ -127,9 +127,7 @@ def test_recording_page_without_clinical_angles_has_no_table(client, world, squa
 def test_workspace_appears_for_an_arm_exercise(client, world, raise_arm):
     data = summary(75.0, {"shoulder_abduction_right": SHOULDER}, workspace={"right": HULL})
     recording = analysed(world.patient, raise_arm, data)
-    html = page(
-        client, world.patient_user, reverse("recordings:detail", kwargs={"pk": recording.pk})
-    )
+    html = page(client, world.therapist, reverse("recordings:detail", kwargs={"pk": recording.pk}))
     box = section(html, "clinical")
     assert "Right shoulder abduction" in box and "0° to 180°" in box
     assert "Reachable workspace" in box and "Right hand" in box

@@ -80,10 +80,13 @@ def test_progress_pdf_range_of_motion_lines_never_join_two_exercises():
         {"exercise_name": "Shoulder abduction", "range_of_motion": {"LeftLowerLeg": 5.0}},
         {"exercise_name": "Deep squat", "range_of_motion": {"LeftLowerLeg": 95.0}},
     ]
+    days = ("2026-11-02T09:00", "2026-11-02T15:00", "2026-11-04T10:00")
+    for point, when in zip(points, days, strict=True):
+        point["date"] = when  # x: days since the report's first day, same-day sessions spread
     charts = rom_series(points)
     assert charts == {
-        "Deep squat": {"left lower leg": [(1, 90.0), (3, 95.0)]},
-        "Shoulder abduction": {"left lower leg": [(2, 5.0)]},
+        "Deep squat": {"left lower leg": [(round(1 / 3, 4), 90.0), (2.5, 95.0)]},
+        "Shoulder abduction": {"left lower leg": [(round(2 / 3, 4), 5.0)]},
     }
 
 

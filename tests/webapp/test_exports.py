@@ -88,8 +88,8 @@ def test_history_csv_one_row_per_analysed_recording(world, history):
     assert "attachment" in response["Content-Disposition"]
     header = next(csv.reader(io.StringIO(response.content.decode())))
     assert header[:4] == ["date (UTC)", "exercise", "score (/100)", "repetitions (count)"]
-    assert header[4:6] == ["repetitions passed (count)", "pain (0-10)"]
-    assert header[6:-1] == [angle_column(name) for name in ANGLE_NAMES]
+    assert header[4:7] == ["repetitions passed (count)", "pain (0-10)", "effort Borg CR10 (0-10)"]
+    assert header[7:-1] == [angle_column(name) for name in ANGLE_NAMES]
     assert "left knee flexion range (°)" in header and header[-1] == "note"
     old, new = rows_of(response)
     assert old["exercise"] == new["exercise"] == "Deep squat"

@@ -178,8 +178,11 @@ def test_patient_page_lists_goals_and_the_form_adds_one(client, world, squat):
         r"<[^>]*>", "", goals
     )  # never the internal name on screen
     client.force_login(world.patient_user)
-    goals = section(client.get(detail).content.decode(), "goals")
-    assert "reach 90°" in goals and 'id="add-goal"' not in goals
+    answer = client.get(detail)  # the therapist's page: the patient is sent to their own pages
+    assert answer.status_code == 302 and answer["Location"] == reverse("dashboard:home")
+    progress = client.get(reverse("dashboard:my-progress")).content.decode()
+    assert "Left knee flexion" in progress and "90°" in progress
+    assert 'id="add-goal"' not in progress
 
 
 def test_the_page_form_refuses_a_target_out_of_range(client, world, squat):

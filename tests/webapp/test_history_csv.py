@@ -48,18 +48,24 @@ def summary(score: float | None, passed: tuple[bool, ...], fits: bool = True) ->
     return result.to_json()
 
 
-def analysed(patient, exercise, data: dict, days_ago: int, pain: int | None) -> Recording:
+def analysed(
+    patient, exercise, data: dict, days_ago: int, pain: int | None, *, effort: int | None = None
+) -> Recording:
     recording = make_recording(patient, exercise)
     AnalysisRun.objects.filter(recording=recording).update(status=RunStatus.SUCCEEDED, summary=data)
     when = timezone.now() - datetime.timedelta(days=days_ago)
-    Recording.objects.filter(pk=recording.pk).update(uploaded_at=when, pain_score=pain)
+    Recording.objects.filter(pk=recording.pk).update(
+        uploaded_at=when, pain_score=pain, effort=effort
+    )
     return recording
 
 
 @pytest.fixture
 def history(world):
     squat = make_exercise(world.clinic)
-    analysed(world.patient, squat, summary(72.25, (True, False, True)), days_ago=8, pain=6)
+    analysed(
+        world.patient, squat, summary(72.25, (True, False, True)), days_ago=8, pain=6, effort=7
+    )
     analysed(world.patient, squat, summary(None, (), fits=False), days_ago=5, pain=None)
     analysed(world.patient, squat, summary(88.0, (True, True)), days_ago=1, pain=2)
     return squat
@@ -93,6 +99,8 @@ def test_the_history_holds_pain_scores_and_counts_oldest_first(world, history):
     assert len(frame) == 3
     assert pd.to_datetime(frame["date (UTC)"]).is_monotonic_increasing
     assert frame["pain (0-10)"].tolist()[0::2] == [6, 2] and frame["pain (0-10)"].isna()[1]
+    effort = frame["effort Borg CR10 (0-10)"]
+    assert effort.tolist()[0] == 7 and effort.isna().tolist()[1:] == [True, True]
     assert frame["repetitions (count)"].tolist() == [3, 0, 2]
     assert frame["repetitions passed (count)"].tolist() == [2, 0, 2]
     assert frame["left knee flexion range (°)"].tolist()[0::2] == [97.5, 97.5]

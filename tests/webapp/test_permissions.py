@@ -44,6 +44,8 @@ STAFF_PAGE: Statuses = (200, 200, 200, 200, 403, 403, 302)
 SIGNED_IN_PAGE: Statuses = (200, 200, 200, 200, 200, 200, 302)
 STAFF_ONLY_OBJECT: Statuses = (200, 200, 200, 404, 403, 403, 302)
 OWN_OBJECT: Statuses = (200, 200, 200, 404, 200, 404, 302)
+# The patient's own copy of a therapist page is sent to the patient's pages (302), in lay words.
+OWN_OBJECT_PATIENT_ELSEWHERE: Statuses = (200, 200, 200, 404, 302, 404, 302)
 OWN_API_OBJECT: Statuses = (200, 200, 200, 404, 200, 404, 401)
 OWN_REPORT_PDF: Statuses = (202, 202, 202, 404, 202, 404, 302)
 OWN_API_REPORT: Statuses = (202, 202, 202, 404, 202, 404, 401)
@@ -86,9 +88,13 @@ CASES = [
     Case("accounts:invitation", "invitation-link", "get", EVERYONE_200),
     Case("accounts:new-password", "password-link", "get", EVERYONE_200),
     Case("dashboard:home", None, "get", SIGNED_IN_PAGE),
+    # The patient's own pages: staff have their own; an exercise not prescribed to them is 404.
+    Case("dashboard:my-progress", None, "get", (403, 403, 403, 403, 200, 200, 302)),
+    Case("dashboard:my-reference", "exercise", "get", (403, 403, 403, 403, 404, 404, 302)),
+    Case("dashboard:my-effort", "recording", "post", (403, 403, 403, 403, 400, 404, 302)),
     Case("patients:list", None, "get", STAFF_PAGE),
     Case("patients:create", None, "get", STAFF_PAGE),
-    Case("patients:detail", "patient", "get", OWN_OBJECT),
+    Case("patients:detail", "patient", "get", OWN_OBJECT_PATIENT_ELSEWHERE),
     Case("patients:edit", "patient", "get", STAFF_ONLY_OBJECT),
     Case("patients:prescribe", "patient", "get", STAFF_ONLY_OBJECT),
     Case("patients:archive", "patient", "post", (302, 302, 302, 404, 403, 403, 302)),
@@ -105,6 +111,11 @@ CASES = [
     Case("exercises:landmarks", "exercise", "post", (400, 400, 400, 404, 403, 403, 302)),
     Case("exercises:grammar", "exercise", "post", (400, 400, 400, 404, 403, 403, 302)),
     Case("exercises:build", "exercise", "post", (302, 302, 302, 404, 403, 403, 302)),
+    Case("exercises:edit", "exercise", "get", STAFF_ONLY_OBJECT),
+    Case("exercises:archive", "exercise", "get", STAFF_ONLY_OBJECT),
+    Case("exercises:reference", "exercise", "get", STAFF_ONLY_OBJECT),
+    Case("exercises:reference-data", "exercise", "get", STAFF_ONLY_OBJECT),
+    Case("exercises:add-rule", "exercise", "post", (400, 400, 400, 404, 403, 403, 302)),
     Case("recordings:upload", None, "get", SIGNED_IN_PAGE),
     Case("recordings:detail", "recording", "get", OWN_OBJECT),
     Case("recordings:status", "recording", "get", OWN_OBJECT),
@@ -142,7 +153,7 @@ CASES = [
     Case("reports:playback-bin", "recording", "get", (409, 409, 409, 404, 409, 404, 302)),
     Case("reports:recording-pdf", "recording", "get", OWN_REPORT_PDF),
     Case("reports:recording-print", "recording", "get", OWN_OBJECT),
-    Case("reports:progress", "patient", "get", OWN_OBJECT),
+    Case("reports:progress", "patient", "get", OWN_OBJECT_PATIENT_ELSEWHERE),
     Case("reports:progress-pdf", "patient", "get", OWN_REPORT_PDF),
     Case("reports:progress-print", "patient", "get", OWN_OBJECT),
     Case("reports:api-recording-report", "recording", "get", OWN_API_REPORT),
@@ -152,6 +163,10 @@ CASES = [
     Case("live:page", "live", "get", OWN_OBJECT),
     Case("live:status", "live", "get", OWN_OBJECT),
     Case("live:replay", "recording", "post", (302, 302, 302, 404, 302, 404, 302)),
+    # Starting (an empty form offers no exercise: back to the patient page) and watching are
+    # the clinic staff's.
+    Case("live:start", "patient", "post", (302, 302, 302, 404, 403, 403, 302)),
+    Case("live:watch", "live", "get", STAFF_ONLY_OBJECT),
     Case("api-live-sessions", None, "post", (400, 400, 400, 400, 400, 400, 401)),
     # Accounts: an empty invitation names no role (400) for staff; patients never invite.
     Case("api-invitations", None, "post", (400, 400, 400, 400, 403, 403, 401)),

@@ -97,7 +97,7 @@ def test_progress_answers_never_read_a_summary(therapist_client, clinic):
 # with a little room for features that add a query; an N+1 query breaks these bounds and the
 # equality checks below at once.
 PATIENT_PAGES = {
-    "/patients/{id}/": 16,
+    "/patients/{id}/": 18,  # + the pain chart's scores and the live-session exercises
     "/patients/{id}/progress.json": 8,
     "/api/v1/patients/{id}/recordings/": 10,
     "/api/v1/patients/{id}/progress/": 8,

@@ -47,7 +47,9 @@ def test_page_draws_layers_guidance_and_verdicts_in_seconds(client, world, recor
     for layer in ("identified", "refined", "periodic"):
         assert f'<input type="checkbox" data-layer="{layer}" checked>' in html
         assert f'class="tl-row layer" data-layer="{layer}"' in html
-    assert "key poses as found (1; 7 candidate moments considered)" in html
+    assert "key poses the analysis found: 1 (out of 7 moments that looked like one)" in html
+    assert "key poses adjusted to the nearest clear position: 1" in html
+    assert "key poses removed (1) or added (1) so they come in the exercise's order" in html
     assert '<span style="left:51.282%">1</span>' in html and "time (s)" in html
     assert 'class="landmark identified type-1" data-frame="3"' in html
     assert 'class="landmark refined type-2" data-frame="20"' in html
@@ -87,7 +89,8 @@ def test_pdf_and_printable_page_hold_the_repetition_table_and_timeline(client, w
     assert body.startswith(b"%PDF")
     drawing = pdf.timeline_drawing(report["timeline"])
     texts = [s.text for s in drawing.contents if hasattr(s, "text")]
-    assert "time (s)" in texts and "#1 pass 74" in texts and "Order check" in texts
+    assert "time (s)" in texts and "#1 pass 74" in texts and "Exercise's order" in texts
+    assert "Key poses found" in texts and "Adjusted key poses" in texts
     client.force_login(world.therapist)
     page = client.get(reverse("reports:recording-print", kwargs={"pk": recording.pk}))
     assert b"passed (score 74, needs 50)" in page.content and b"Time (s)" in page.content

@@ -127,7 +127,7 @@ def test_help_page_renders_the_guide_with_its_pictures(client, db):
 
 def test_help_link_on_pages_for_visitors_and_users(world, client):
     assert f'href="{reverse("help:guide")}"' in client.get(reverse("accounts:login")).text
-    client.force_login(world.patient_user)
+    client.force_login(world.therapist)  # the guide is the clinics': patients are not sent there
     assert f'href="{reverse("help:guide")}"' in client.get(reverse("dashboard:home")).text
 
 

@@ -58,7 +58,8 @@ def weights_of(html: str) -> list[dict]:
 
 def test_report_shows_every_part_in_plain_words(client, world, exercise):
     html = page(client, world, exercise, ready_model(exercise, REPORT))
-    assert "a decision tree (C4.5), boosted (AdaBoost)" in html
+    assert "a chain of yes/no questions about the body&#x27;s pose" in html
+    assert "several of them voting together" in html
     assert "grouped wherever they are far apart in time" in html
     assert "start → end of range</li>" in html and "start → end of range → start" in html
     assert "A repetition passes with a score of <strong>70</strong>" in html
@@ -73,7 +74,18 @@ def test_report_shows_every_part_in_plain_words(client, world, exercise):
         {"name": "spine 1", "weight": 0.25},
     ]
     assert "plotly.min.js" in html and "training_report.js" in html
-    for internal in ("c45", "mu1", "LeftUpLeg", "gesture_scale", "periodic_patterns"):
+    for internal in (
+        "c45",
+        "C4.5",
+        "AdaBoost",
+        "decision tree",
+        "boosted",
+        "Candidate",
+        "mu1",
+        "LeftUpLeg",
+        "gesture_scale",
+        "periodic_patterns",
+    ):
         assert internal not in html
 
 
@@ -106,7 +118,7 @@ def test_older_models_show_what_they_have(client, world, exercise):
     ):
         assert missing not in html
     html = page(client, world, exercise, ready_model(exercise, {}, version=2))
-    assert "This model has no training report." in html
+    assert "This model has no report." in html
 
 
 def test_weights_without_joint_names_are_numbered(client, world, exercise):
@@ -124,7 +136,7 @@ def test_exercise_page_shows_the_active_models_report_and_links_versions(client,
     client.force_login(world.therapist)
     url = reverse("exercises:detail", kwargs={"pk": exercise.pk})
     html = client.get(url).content.decode()
-    assert "model version 2 (active)" in html and "set from labelled recordings" in html
+    assert "model version 2 (in use)" in html and "set from labelled recordings" in html
     assert f'href="?model={older.pk}#training-report"' in html
     html = client.get(f"{url}?model={older.pk}").content.decode()
     assert "model version 1</h2>" in html and "3 repetitions of the reference" in html

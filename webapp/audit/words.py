@@ -23,6 +23,7 @@ KIND_WORDS = {
     "User": "account",
     "Goal": "goal",
     "RecordingNote": "clinical note",
+    "LiveSession": "live session",
 }
 
 

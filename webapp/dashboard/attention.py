@@ -10,7 +10,8 @@ Five signals, each one query over the clinic (never one query per patient):
 - missed sessions: fewer than half the sessions a prescription asks for were done over the last
   two weeks (sessions counted as in `webapp.patients.adherence`: days with a recording);
 - pain: a recording of the last two weeks came with a pain score of PAIN_ATTENTION (6/10) or
-  more (the newest such recording per patient);
+  more (the newest such recording per patient), or pain rising over the last PAIN_TREND_SESSIONS
+  sessions with a pain score (never falling between two of them, up PAIN_RISE points or more);
 - goals: a goal not met by its date, or off track (`webapp.patients.goals` says when), read in
   one query over the clinic's goals and one over their sessions (plus the adherence of the
   patients with an adherence goal).
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 import datetime
 from dataclasses import dataclass, field
+from itertools import pairwise
 from typing import Any, NamedTuple
 
 from django.db.models import (
@@ -55,6 +57,8 @@ ADHERENCE_MIN_PERCENT = 50.0
 NEWEST_FIRST = (F("recording__uploaded_at").desc(), F("created_at").desc())
 PAIN_ATTENTION = 6  # of 10: from here on a therapist looks before the next session
 PAIN_WITHIN_DAYS = 14
+PAIN_TREND_SESSIONS = 3  # the newest sessions with a pain score, read as a trend
+PAIN_RISE = 2  # points of 10 from the first to the last of them
 ROWS_PER_SIGNAL = 500  # caps each query; a clinic with more flags has bigger problems
 GOAL_URGENCY = {NOT_MET: 150.0}  # below missed sessions and falling scores; off track: 120
 
@@ -251,6 +255,55 @@ def reported_pain(
     return list(found.items())
 
 
+def rising_pain(
+    clinic_id: Any, now: datetime.datetime, patient_id: Any = None
+) -> list[tuple[Any, Reason]]:
+    """Patients whose pain score rose over their last PAIN_TREND_SESSIONS scored sessions (the
+    newest of them in the last PAIN_WITHIN_DAYS days): a window function numbers each patient's
+    scored recordings, newest first, and the rule is applied here."""
+    recordings = Recording.objects.filter(
+        clinic_id=clinic_id,
+        deleted_at__isnull=True,
+        patient__archived_at__isnull=True,
+        patient__deleted_at__isnull=True,
+        pain_score__isnull=False,
+    )
+    if patient_id is not None:
+        recordings = recordings.filter(patient_id=patient_id)
+    rows = (
+        recordings.annotate(
+            position=Window(
+                RowNumber(), partition_by=[F("patient_id")], order_by=F("uploaded_at").desc()
+            ),
+            newest_at=Window(Max("uploaded_at"), partition_by=[F("patient_id")]),
+        )
+        .filter(position__lte=PAIN_TREND_SESSIONS, newest_at__gte=now - _days(PAIN_WITHIN_DAYS))
+        .values("pk", "patient_id", "pain_score", "position")
+        .order_by("patient_id", "-position")
+    )
+    by_patient: dict[Any, list[dict]] = {}
+    for row in rows[: ROWS_PER_SIGNAL * PAIN_TREND_SESSIONS]:
+        by_patient.setdefault(row["patient_id"], []).append(row)
+    found = []
+    for flagged, sessions in by_patient.items():
+        reason = pain_trend([s["pain_score"] for s in sessions], sessions[-1]["pk"])
+        if reason is not None:
+            found.append((flagged, reason))
+    return found
+
+
+def pain_trend(scores: list[int], recording_id: Any = None) -> Reason | None:
+    """The reason when pain scores (oldest first) never fall and rise PAIN_RISE points or more
+    over PAIN_TREND_SESSIONS sessions; urgent as high pain, more so the steeper the rise."""
+    if len(scores) < PAIN_TREND_SESSIONS:
+        return None
+    rise = scores[-1] - scores[0]
+    if rise < PAIN_RISE or any(b < a for a, b in pairwise(scores)):
+        return None
+    text = f"Pain rising: {scores[0]} → {scores[-1]} (0–10) over the last {len(scores)} sessions"
+    return Reason("pain", text, 250.0 + 5 * rise, recording_id)
+
+
 def goals_off_track(
     clinic_id: Any, today: datetime.date, patient_id: Any = None
 ) -> list[tuple[Any, Reason]]:
@@ -286,7 +339,7 @@ def session_days(
 def patients_needing_attention(
     clinic_id: Any, now: datetime.datetime | None = None, patient_id: Any = None
 ) -> list[Attention]:
-    """Patients with at least one reason, the most urgent first (six queries in all, more
+    """Patients with at least one reason, the most urgent first (seven queries in all, more
     for patients with an adherence goal).
 
     Computed from the runs, recordings and prescriptions; the home page reads the stored copy
@@ -299,6 +352,7 @@ def patients_needing_attention(
     found += falling_scores(clinic_id, now, patient_id)
     found += missed_sessions(clinic_id, timezone.localdate(now), patient_id)
     found += reported_pain(clinic_id, now, patient_id)
+    found += rising_pain(clinic_id, now, patient_id)
     found += goals_off_track(clinic_id, timezone.localdate(now), patient_id)
     by_patient: dict[Any, Attention] = {}
     for flagged, reason in found:

@@ -7,8 +7,9 @@ from django.views.decorators.cache import never_cache
 from django.views.decorators.http import require_GET
 
 from webapp.accounts.permissions import visible_patients
-from webapp.dashboard import health
+from webapp.dashboard import health, patient_result
 from webapp.dashboard import home as parts
+from webapp.live.services import under_way
 
 
 @require_GET
@@ -35,14 +36,17 @@ def home(request: HttpRequest) -> HttpResponse:
         "active_limit": parts.ACTIVE_RUNS,
     }
     if user.is_patient:
-        return render(request, "dashboard/patient_home.html", context | patient_context(user))
+        extra = patient_context(user, context["recent"])
+        return render(request, "dashboard/patient_home.html", context | extra)
     context["attention"] = parts.attention_page(user, request.GET.get("attention_page"))
     context["my_patients"] = parts.my_patients(user)
+    context["live_under_way"] = under_way(user)
     return render(request, "dashboard/home.html", context)
 
 
-def patient_context(user) -> dict:
+def patient_context(user, recent: list) -> dict:
     patient = visible_patients(user).first()
     if patient is None:
         return {"patient": None, "prescriptions": []}
-    return {"patient": patient, **parts.patient_plan(patient)}
+    last = patient_result.last_session(recent)
+    return {"patient": patient, "last": last, **parts.patient_plan(patient)}

@@ -12,14 +12,17 @@ from __future__ import annotations
 
 import json
 
+from django.contrib import messages
 from django.contrib.auth.decorators import login_required
 from django.http import HttpRequest, HttpResponse, JsonResponse
-from django.shortcuts import render
+from django.shortcuts import redirect, render
+from django.urls import reverse
 from django.views.decorators.http import require_POST
 
 from analysis.feedback import GrammarError, check_names
 from analysis.landmarks import suggest_key_poses
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
+from webapp.audit import log
 from webapp.exercises.annotate_data import (
     angle_curves,
     default_grammar_text,
@@ -30,10 +33,19 @@ from webapp.exercises.annotate_data import (
     tutor_pose,
     type_names,
 )
+from webapp.exercises.body_parts import offered, representatives, ticked
 from webapp.exercises.forms import LandmarksForm
 from webapp.exercises.models import Exercise
+from webapp.exercises.rule_picker import RuleForm, appended
 
-__all__ = ["angle_curves", "annotate_page", "check_grammar", "save_landmarks", "tutor_data"]
+__all__ = [
+    "add_rule",
+    "angle_curves",
+    "annotate_page",
+    "check_grammar",
+    "save_landmarks",
+    "tutor_data",
+]
 
 
 @login_required
@@ -41,18 +53,49 @@ __all__ = ["angle_curves", "annotate_page", "check_grammar", "save_landmarks", "
 def annotate_page(request: HttpRequest, pk) -> HttpResponse:
     """The page; an exercise with no grammar yet shows the one it would be given."""
     exercise = get_exercise_for_user(request, pk)
-    grammar, is_default = exercise.feedback_grammar, False
-    if not grammar.strip():
-        motion = exercise.tutor_motion()
-        order = movement_order(angle_curves(motion), tuple(motion.skeleton.names))
-        grammar, is_default = default_grammar_text(exercise, motion, order), True
-    context = {
+    motion = exercise.tutor_motion()
+    form = RuleForm(exercise=exercise, skeleton=motion.skeleton)
+    return render(request, "exercises/annotate.html", page_context(exercise, form))
+
+
+def shown_grammar(exercise: Exercise) -> tuple[str, bool]:
+    """The exercise's rules, or the default ones it would be given (and whether they are)."""
+    if exercise.feedback_grammar.strip():
+        return exercise.feedback_grammar, False
+    motion = exercise.tutor_motion()
+    order = movement_order(angle_curves(motion), tuple(motion.skeleton.names))
+    return default_grammar_text(exercise, motion, order), True
+
+
+def page_context(exercise: Exercise, form: RuleForm, grammar: str | None = None) -> dict:
+    shown, is_default = shown_grammar(exercise)
+    return {
         "exercise": exercise,
-        "grammar": grammar,
-        "grammar_is_default": is_default,
+        "grammar": shown if grammar is None else grammar,
+        "grammar_is_default": is_default and grammar is None,
         "findings": grammar_has_findings(),
+        "rule_form": form,
     }
-    return render(request, "exercises/annotate.html", context)
+
+
+@login_required
+@require_staff
+@require_POST
+def add_rule(request: HttpRequest, pk) -> HttpResponse:
+    """The picked rule appended to the exercise's rules, saved when the whole text is valid."""
+    exercise = get_exercise_for_user(request, pk)
+    form = RuleForm(request.POST, exercise=exercise, skeleton=exercise.tutor_motion().skeleton)
+    if form.is_valid():
+        text = appended(shown_grammar(exercise)[0], form.rule_text())
+        verdict = grammar_verdict(text, exercise)
+        if verdict["valid"]:
+            Exercise.objects.filter(pk=exercise.pk).update(feedback_grammar=text)
+            log.record(request, "update", exercise)
+            messages.success(request, "Rule added to the feedback rules.")
+            return redirect(reverse("exercises:annotate", args=[exercise.pk]) + "#grammar-editor")
+        form.add_error(None, f"The rule could not be added: {verdict['message']}.")
+    context = page_context(exercise, form)
+    return render(request, "exercises/annotate.html", context, status=400)
 
 
 @login_required
@@ -69,13 +112,17 @@ def tutor_data(request: HttpRequest, pk) -> JsonResponse:
             "joints": list(motion.skeleton.names),
             # Anatomical names for the page: rig joint names are never shown.
             "labels": plain_labels(motion),
-            "movement_order": movement_order(curves, tuple(motion.skeleton.names)),
+            # Each body part once (a rig's connector joints read as the part below them).
+            "movement_order": offered(
+                motion.skeleton, movement_order(curves, tuple(motion.skeleton.names))
+            ),
+            "body_parts": offered(motion.skeleton, motion.skeleton.names),
             "angles_deg": curves,
             "pose": tutor_pose(motion),
             "landmark_frames": exercise.tutor_landmark_frames,
             "landmark_types": exercise.tutor_landmark_types,
             "type_names": exercise.landmark_type_names,
-            "involved_joints": exercise.involved_joints,
+            "involved_joints": ticked(motion.skeleton, exercise.involved_joints),
             "suggested_frames": list(suggestion.frames),
             "suggested_types": list(suggestion.types),
         }
@@ -99,8 +146,10 @@ def save_landmarks(request: HttpRequest, pk) -> JsonResponse:
     exercise.landmark_type_names = kept_type_names(
         data.get("type_names") or {}, exercise.landmark_type_names, data["types_list"]
     )
-    exercise.involved_joints = data.get("involved_joints") or []
+    chosen = representatives(motion.skeleton)
+    exercise.involved_joints = sorted({chosen[j] for j in data.get("involved_joints") or []})
     exercise.save()
+    log.record(request, "update", exercise)
     return JsonResponse({"saved": True, "landmark_frames": exercise.tutor_landmark_frames})
 
 
@@ -148,5 +197,6 @@ def check_grammar(request: HttpRequest, pk) -> JsonResponse:
     verdict = grammar_verdict(text, exercise)
     if verdict["valid"] and body.get("save"):
         Exercise.objects.filter(pk=exercise.pk).update(feedback_grammar=text)
+        log.record(request, "update", exercise)
         verdict["saved"] = True
     return JsonResponse(verdict, status=200 if verdict["valid"] or not body.get("save") else 400)

@@ -21,7 +21,8 @@ from analysis.feedback import Grammar, GrammarError, default_grammar
 from analysis.feedback.text import joint_label
 from analysis.kinematics import positions, rotations
 from analysis.pipeline.model_fit import moving_joints
-from webapp.recordings.words import key_pose_name, rig_table
+from webapp.exercises import body_parts
+from webapp.recordings.words import key_pose_name
 
 DEFAULT_GRAMMAR_JOINTS = 3  # joints a default grammar speaks of when the key poses pick none
 
@@ -55,7 +56,7 @@ def tutor_pose(motion: Motion) -> dict[str, Any]:
 
 def plain_labels(motion: Motion) -> dict[str, str]:
     """Every joint's anatomical name ("left thigh"), for the page's lists and captions."""
-    return rig_table(motion.skeleton)
+    return body_parts.plain_labels(motion.skeleton)
 
 
 def grammar_names(names: tuple[str, ...]) -> dict[str, str]:

@@ -15,19 +15,22 @@ def parse_int_list(text: str, field: str) -> list[int]:
 
 
 class ExerciseForm(forms.ModelForm):
-    """Create an exercise from its tutor recording (the reference performance)."""
+    """Create an exercise from its tutor recording (the reference performance).
 
-    tutor = forms.FileField(help_text="The reference performance as BVH (.bvh or .bvh.gz).")
-    landmark_frames = forms.CharField(
-        required=False, help_text="Key-pose frames, e.g. 0;41;72. You can mark them later."
+    Key poses are marked on the key-pose page, on a chart of the movement; the two hidden fields
+    still take them from a script that knows their frames (the demo, tests)."""
+
+    tutor = forms.FileField(
+        label="Reference recording",
+        help_text="A recording of the exercise done well, as a BVH file (.bvh or .bvh.gz).",
     )
-    landmark_types = forms.CharField(
-        required=False, help_text="Key-pose type of each frame, e.g. 1;2;1."
-    )
+    landmark_frames = forms.CharField(required=False, widget=forms.HiddenInput)
+    landmark_types = forms.CharField(required=False, widget=forms.HiddenInput)
 
     class Meta:
         model = Exercise
         fields = ["name", "description"]
+        labels = {"name": "Name", "description": "Instructions for the patient"}
 
     def __init__(self, *args, clinic, **kwargs):
         super().__init__(*args, **kwargs)
@@ -42,6 +45,8 @@ class ExerciseForm(forms.ModelForm):
 
     def clean_tutor(self):
         upload = self.cleaned_data["tutor"]
+        if not (upload.name or "").lower().endswith((".bvh", ".bvh.gz")):
+            raise ValidationError("The reference must be a BVH file (.bvh or .bvh.gz).")
         self.parsed = parse_upload(upload)
         return upload
 
@@ -101,3 +106,39 @@ class LandmarksForm(forms.Form):
         if unknown:
             raise ValidationError(f"Unknown joints: {', '.join(unknown)}.")
         return cleaned
+
+
+class ExerciseEditForm(forms.ModelForm):
+    """Rename an exercise or change its instructions."""
+
+    class Meta:
+        model = Exercise
+        fields = ["name", "description"]
+        labels = {"name": "Name", "description": "Instructions for the patient"}
+
+    def clean_name(self):
+        name = self.cleaned_data["name"].strip()
+        others = Exercise.objects.filter(clinic=self.instance.clinic_id, name__iexact=name)
+        if others.exclude(pk=self.instance.pk).exists():
+            raise ValidationError("Your clinic already has an exercise with this name.")
+        return name
+
+
+class ReferenceForm(forms.Form):
+    """A new reference recording for an exercise."""
+
+    tutor = forms.FileField(
+        label="New reference recording",
+        help_text="A recording of the exercise done well, as a BVH file (.bvh or .bvh.gz).",
+    )
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.parsed: ParsedUpload | None = None
+
+    def clean_tutor(self):
+        upload = self.cleaned_data["tutor"]
+        if not (upload.name or "").lower().endswith((".bvh", ".bvh.gz")):
+            raise ValidationError("The reference must be a BVH file (.bvh or .bvh.gz).")
+        self.parsed = parse_upload(upload)
+        return upload

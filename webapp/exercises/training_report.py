@@ -15,14 +15,15 @@ from webapp.exercises.models import ExerciseModel
 
 log = logging.getLogger(__name__)
 
+# How each method finds key poses, said without the method's name (therapists read this page).
 CLASSIFIERS = {
-    "c45": "a decision tree (C4.5)",
-    "svm": "a support vector machine",
-    "nb": "a naive Bayes classifier",
+    "c45": "a chain of yes/no questions about the body's pose, learnt from the reference",
+    "svm": "a dividing line between the kinds of pose, learnt from the reference",
+    "nb": "the odds of each kind of pose, learnt from the reference",
 }
 CLUSTERING = {
-    "em": "grouped by expectation–maximisation",
-    "kmeans": "grouped by k-means",
+    "em": "grouped by how likely they belong together",
+    "kmeans": "grouped around their average moments",
     "tc": "grouped by their spacing in time",
     "gap": "grouped wherever they are far apart in time",
 }
@@ -36,18 +37,20 @@ _joint_names: dict[str, list[str]] = {}
 
 
 def classifier_words(text: str) -> str:
-    """'c45 + AdaBoost' -> 'a decision tree (C4.5), boosted (AdaBoost)'."""
+    """'c45 + AdaBoost' -> 'a chain of yes/no questions …, several of them voting together'."""
     name, _, boost = str(text).partition(" + ")
-    words = CLASSIFIERS.get(name.strip(), name.strip())
-    return f"{words}, boosted ({boost.strip()})" if boost else words
+    words = CLASSIFIERS.get(name.strip(), "a method learnt from the reference")
+    return f"{words}, several of them voting together" if boost else words
 
 
 def refining_words(text: str) -> str:
-    """'gap clustering, mu1 selection' -> plain words for both choices."""
+    """'gap clustering, mu1 selection' -> plain words for both choices (a method this page does
+    not know is left out rather than named)."""
     parts = [p.strip().split(" ")[0] for p in str(text).split(",")]
-    clustering = CLUSTERING.get(parts[0], parts[0]) if parts else ""
-    selection = SELECTION.get(parts[1], parts[1]) if len(parts) > 1 else ""
-    return "Candidate frames " + ", ".join(p for p in (clustering, selection) if p)
+    clustering = CLUSTERING.get(parts[0], "") if parts else ""
+    selection = SELECTION.get(parts[1], "") if len(parts) > 1 else ""
+    said = ", ".join(p for p in (clustering, selection) if p)
+    return f"Moments that look alike are {said}" if said else "Moments that look alike are merged"
 
 
 def pattern_words(pattern: Sequence[Any], names: Mapping[str, str]) -> str:
@@ -70,12 +73,12 @@ def scorer_words(report: Mapping[str, Any]) -> str | None:
         return None
     trained = str(scorer.get("source", "")).startswith("labelled")
     basis = (
-        "trained on the therapist's labelled recordings, checked against the reference"
+        "is trained on the therapist's labelled recordings, checked against the reference"
         if trained
         else "compares each repetition with how much the reference's own repetitions differ"
     )
     joints = scorer.get("joints")
-    return f"Scores {basis}" + (f" ({joints} joints)." if joints else ".")
+    return f"The score {basis}" + (f" ({joints} body parts)." if joints else ".")
 
 
 def involved_joint_names(row: ExerciseModel, count: int) -> list[str]:

@@ -8,11 +8,14 @@ from django.contrib.auth.decorators import login_required
 from django.core.files.base import ContentFile
 from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import redirect, render
+from django.utils import timezone
 from django.views.decorators.http import require_POST
 
 from webapp.accounts.permissions import get_exercise_for_user, require_staff, visible_exercises
+from webapp.audit import log
 from webapp.exercises import services
-from webapp.exercises.forms import ExerciseForm
+from webapp.exercises.annotate_data import tutor_pose
+from webapp.exercises.forms import ExerciseEditForm, ExerciseForm, ReferenceForm
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from webapp.exercises.training_report import training_report
 
@@ -20,9 +23,11 @@ from webapp.exercises.training_report import training_report
 @login_required
 @require_staff
 def exercise_list(request: HttpRequest) -> HttpResponse:
-    exercises = visible_exercises(request.user).filter(archived_at__isnull=True)
+    show_archived = request.GET.get("archived") == "1"
+    exercises = visible_exercises(request.user).filter(archived_at__isnull=not show_archived)
     exercises = exercises.select_related("active_model")
-    return render(request, "exercises/list.html", {"exercises": exercises})
+    context = {"exercises": exercises, "show_archived": show_archived}
+    return render(request, "exercises/list.html", context)
 
 
 @login_required
@@ -31,10 +36,19 @@ def exercise_create(request: HttpRequest) -> HttpResponse:
     form = ExerciseForm(request.POST or None, request.FILES or None, clinic=request.user.clinic)
     if request.method == "POST" and form.is_valid():
         exercise = save_new_exercise(form, request.user.clinic)
+        log.record(request, "create", exercise)
         messages.success(request, f"Exercise {exercise.name} created. Mark its key poses next.")
         return redirect("exercises:detail", pk=exercise.pk)
     status = 400 if request.method == "POST" else 200
-    return render(request, "exercises/form.html", {"form": form}, status=status)
+    context = {
+        "form": form,
+        "title": "New exercise",
+        "intro": "Give the exercise a name and upload a recording of it done well (the "
+        "reference). Next you mark its key poses, such as the start and the end of the movement, "
+        "on a chart of the reference.",
+        "submit": "Create exercise",
+    }
+    return render(request, "exercises/form.html", context, status=status)
 
 
 def save_new_exercise(form: ExerciseForm, clinic) -> Exercise:
@@ -98,5 +112,88 @@ def model_status(request: HttpRequest, pk) -> JsonResponse:
                 {"id": str(r.pk), "version": r.version, "status": r.status, "progress": r.progress}
                 for r in rows
             ],
+        }
+    )
+
+
+@login_required
+@require_staff
+def exercise_edit(request: HttpRequest, pk) -> HttpResponse:
+    exercise = get_exercise_for_user(request, pk)
+    title = f"Change {exercise.name}"  # before the form writes a posted name into the row
+    form = ExerciseEditForm(request.POST or None, instance=exercise)
+    if request.method == "POST" and form.is_valid():
+        form.save()
+        log.record(request, "update", exercise)
+        messages.success(request, f"Exercise {exercise.name} saved.")
+        return redirect("exercises:detail", pk=exercise.pk)
+    status = 400 if request.method == "POST" else 200
+    context = {"form": form, "title": title, "exercise": exercise}
+    return render(request, "exercises/form.html", context, status=status)
+
+
+@login_required
+@require_staff
+def exercise_archive(request: HttpRequest, pk) -> HttpResponse:
+    """GET asks to confirm; POST archives an active exercise or brings back an archived one."""
+    exercise = get_exercise_for_user(request, pk)
+    if request.method != "POST":
+        return render(request, "exercises/archive.html", {"exercise": exercise})
+    exercise.archived_at = None if exercise.archived_at else timezone.now()
+    exercise.save(update_fields=["archived_at"])
+    log.record(request, "update", exercise)
+    if exercise.archived_at:
+        messages.success(
+            request,
+            f"{exercise.name} is archived: it is no longer offered for new recordings "
+            "or prescriptions; its recordings and results stay.",
+        )
+    else:
+        messages.success(request, f"{exercise.name} is offered again.")
+    return redirect("exercises:detail", pk=exercise.pk)
+
+
+@login_required
+@require_staff
+def replace_reference(request: HttpRequest, pk) -> HttpResponse:
+    exercise = get_exercise_for_user(request, pk)
+    form = ReferenceForm(request.POST or None, request.FILES or None)
+    if request.method == "POST" and form.is_valid():
+        parsed = form.parsed
+        row = services.replace_reference(exercise, parsed.content, parsed.motion)
+        log.record(request, "update", exercise)
+        messages.success(
+            request,
+            f"New reference saved; model version {row.version} is built from it. "
+            "Earlier results keep the version they were made with. Check the key poses.",
+        )
+        return redirect("exercises:detail", pk=exercise.pk)
+    status = 400 if request.method == "POST" else 200
+    context = {
+        "form": form,
+        "title": f"Replace the reference of {exercise.name}",
+        "intro": "A new model version is built from the new reference. Results of recordings "
+        "already analysed keep the version they were made with; new analyses use the new one.",
+        "submit": "Replace the reference",
+        "exercise": exercise,
+    }
+    return render(request, "exercises/form.html", context, status=status)
+
+
+@login_required
+@require_staff
+def reference_data(request: HttpRequest, pk) -> JsonResponse:
+    """The reference's positions for the player on the exercise page."""
+    exercise = get_exercise_for_user(request, pk)
+    motion = exercise.tutor_motion()
+    pose = tutor_pose(motion)
+    return JsonResponse(
+        {
+            "fps": motion.fps,
+            "n_frames": int(motion.frames.shape[0]),
+            "joints": len(motion.skeleton.names),
+            "names": list(motion.skeleton.names),
+            "parents": pose["parents"],
+            "positions": pose["positions"],
         }
     )

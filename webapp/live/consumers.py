@@ -15,6 +15,11 @@ the same session in this process (`CONNECTIONS`), or one in another process that
 through the channel layer. A capture client alone costs no channel-layer traffic (with Redis,
 a round trip per event), which is most of what a server spends per frame besides the aligner.
 
+A connection opened with ``?watch=1`` (the watch page of a therapist) only follows: it sends no
+frames, and what it sends is refused. While frames arrive, the session's row records them
+(`services.record_activity`: at each repetition, and at most every `ACTIVITY_EVERY` seconds
+otherwise), so the therapist's home page lists the session while it runs.
+
 A batch of frames (``{"type": "frames", ...}``, `analysis.live.session`) is answered with one
 message, a JSON array of its events (none when it has none): the per-message cost of Daphne and
 Channels, most of a frame's cost, is paid once per batch. JSON is read and written with orjson
@@ -28,6 +33,7 @@ import json
 import logging
 import time
 from typing import Any
+from urllib.parse import parse_qs
 
 from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncWebsocketConsumer
@@ -51,16 +57,24 @@ CONNECTIONS: dict[str, int] = {}  # open connections per session in this process
 MAX_MESSAGE_BYTES = 1 << 20
 REFUSED = 4403
 REPLAY_SPEED = 1.0  # times real time
+ACTIVITY_EVERY = 5.0  # seconds between writes of "frames still arriving" to the session's row
 
 
 def _error(code: str, message: str) -> dict[str, Any]:
     return {"event": "error", "code": code, "message": message, "seq": None}
 
 
+def is_watcher(scope: dict[str, Any]) -> bool:
+    query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+    return query.get("watch", [""])[0] == "1"
+
+
 class LiveConsumer(AsyncWebsocketConsumer):
     live: LiveSession
     replay: asyncio.Task[None] | None = None
     heard_other = False  # a connection of this session in another process said hello
+    watching = False  # a read-only follower (the watch page)
+    activity_at = float("-inf")  # when this connection last wrote the session's activity
 
     async def connect(self) -> None:
         session_id = str(self.scope["url_route"]["kwargs"]["session_id"])
@@ -74,6 +88,7 @@ class LiveConsumer(AsyncWebsocketConsumer):
             await self.close(code=REFUSED)  # before accept: the handshake answers 403
             return
         self.user, self.live, self.key = user, live, str(live.pk)
+        self.watching = is_watcher(self.scope)
         self.group = f"live-{self.key}"
         await self.channel_layer.group_add(self.group, self.channel_name)
         await self.accept()
@@ -86,7 +101,7 @@ class LiveConsumer(AsyncWebsocketConsumer):
             await self.send_json(state.ready())
         elif live.status == LiveStatus.ENDED:
             await self.send_json({**live.summary, "event": "summary"})
-        elif live.replay_of_id is not None:
+        elif live.replay_of_id is not None and not self.watching:
             self.replay = asyncio.create_task(self._replay())
 
     async def dispatch(self, message: dict[str, Any]) -> None:
@@ -114,6 +129,9 @@ class LiveConsumer(AsyncWebsocketConsumer):
         received = time.perf_counter()
         if text_data is None or len(text_data) > MAX_MESSAGE_BYTES:
             await self.send_json(_error("bad-message", "send JSON text messages under 1 MB"))
+            return
+        if self.watching:
+            await self.send_json(_error("read-only", "a watching connection sends nothing"))
             return
         try:
             message = _loads(text_data)
@@ -144,6 +162,18 @@ class LiveConsumer(AsyncWebsocketConsumer):
                 await self.send_json(event)
         for event in events:
             await self._broadcast(state, event)
+        await self._note_activity(events)
+
+    async def _note_activity(self, events: list[dict[str, Any]]) -> None:
+        """Write that frames are arriving: at once for a new repetition, otherwise at most
+        every `ACTIVITY_EVERY` seconds (not a database write per frame)."""
+        counts = [int(e["index"]) + 1 for e in events if e["event"] == "repetition"]
+        now = time.monotonic()
+        if not counts and now - self.activity_at < ACTIVITY_EVERY:
+            return
+        self.activity_at = now
+        repetitions = max(counts) if counts else None
+        await database_sync_to_async(services.record_activity)(self.key, repetitions)
 
     async def _state(self, message: Any) -> SessionState:
         state = SESSIONS.get(self.key)

@@ -1,7 +1,8 @@
 """Live sessions: a patient exercising while the server aligns each frame with the tutor.
 
 Status: OPEN (created) → LIVE (frames arriving) → ENDED (summary stored; the frames became a
-Recording, analysed by the normal pipeline). A replay session streams a stored recording
+Recording, analysed by the normal pipeline). While LIVE, `last_frame_at` and `repetitions` follow
+the stream (`webapp.live.services.record_activity`). A replay session streams a stored recording
 (``replay_of``) through the same path and stores no new recording.
 """
 
@@ -47,6 +48,10 @@ class LiveSession(models.Model):
         related_name="live_sessions",
     )
     summary = models.JSONField(default=dict, blank=True)
+    # Kept up to date while frames arrive, so the session shows on the therapist's home page
+    # while it runs (not only once it ends); a session with no frame for a while is left off.
+    last_frame_at = models.DateTimeField(null=True, blank=True)
+    repetitions = models.PositiveIntegerField(default=0)
 
     class Meta:
         ordering = ["-created_at"]

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import datetime
 import gzip
 import hashlib
+from collections.abc import Iterable
 from typing import Any
 
 from django.db import transaction
-from django.db.models import QuerySet
+from django.db.models import Q, QuerySet
 from django.utils import timezone
 
 from analysis.bvh import Motion, read
@@ -16,7 +18,7 @@ from analysis.pipeline import FittedModel
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
 from webapp.live.models import LiveSession, LiveStatus
-from webapp.patients.models import Patient
+from webapp.patients.models import Patient, Prescription
 from webapp.recordings.models import Recording
 from webapp.recordings.storage import read_verified
 from webapp.recordings.uploads import MIN_FRAMES, ParsedUpload, store_recording
@@ -70,8 +72,63 @@ def exercise_model(exercise: Exercise) -> FittedModel:
     return model
 
 
+# A session whose capture system sent nothing for this long has stopped without saying so (a
+# dropped network, a closed laptop): it leaves the list of sessions under way.
+STALE_AFTER = datetime.timedelta(minutes=2)
+UNDER_WAY_LIMIT = 20
+
+
 def mark_live(live: LiveSession) -> None:
-    LiveSession.objects.filter(pk=live.pk, status=LiveStatus.OPEN).update(status=LiveStatus.LIVE)
+    LiveSession.objects.filter(pk=live.pk, status=LiveStatus.OPEN).update(
+        status=LiveStatus.LIVE, last_frame_at=timezone.now()
+    )
+
+
+def record_activity(session_id: Any, repetitions: int | None = None) -> None:
+    """Frames arrived for the session (and, when given, its repetitions so far); an ended
+    session is left as it is."""
+    fields: dict[str, Any] = {"status": LiveStatus.LIVE, "last_frame_at": timezone.now()}
+    if repetitions is not None:
+        fields["repetitions"] = repetitions
+    LiveSession.objects.filter(pk=session_id).exclude(status=LiveStatus.ENDED).update(**fields)
+
+
+def under_way(user: User, now: datetime.datetime | None = None) -> list[LiveSession]:
+    """The user's clinic's sessions of patients exercising now, newest first: not ended, not a
+    replay of a stored recording, and a frame (or, before the first, the start) within
+    `STALE_AFTER`."""
+    cutoff = (now or timezone.now()) - STALE_AFTER
+    recent = Q(last_frame_at__gte=cutoff) | Q(last_frame_at__isnull=True, created_at__gte=cutoff)
+    sessions = (
+        visible_sessions(user)
+        .filter(recent, status__in=(LiveStatus.OPEN, LiveStatus.LIVE), replay_of__isnull=True)
+        .select_related("patient", "exercise")
+        .order_by("-created_at")
+    )
+    return list(sessions[:UNDER_WAY_LIMIT])
+
+
+def startable_exercises(patient: Patient) -> list[Exercise]:
+    """The exercises a live session can follow for the patient (`startable_of`)."""
+    return startable_of(patient.prescriptions.select_related("exercise"))
+
+
+def startable_of(
+    prescriptions: Iterable[Prescription], today: datetime.date | None = None
+) -> list[Exercise]:
+    """Of these prescriptions (their exercises read with them), the exercises a live session can
+    follow: prescribed now, not archived, with a model built (every frame is aligned with it).
+    The patient page passes the prescriptions it has read, so offering costs no query."""
+    today = today or timezone.localdate()
+    chosen = {
+        p.exercise.pk: p.exercise
+        for p in prescriptions
+        if p.start_date <= today
+        and (p.end_date is None or p.end_date >= today)
+        and p.exercise.active_model_id is not None
+        and p.exercise.archived_at is None
+    }
+    return sorted(chosen.values(), key=lambda exercise: exercise.name)
 
 
 def store_frames(live: LiveSession, bvh_text: str | None, user: User | None) -> Recording | None:
@@ -98,7 +155,7 @@ def finish(live: LiveSession, summary: dict[str, Any], recording: Recording | No
     with transaction.atomic():
         LiveSession.objects.filter(pk=live.pk).update(
             status=LiveStatus.ENDED, ended_at=timezone.now(), summary=summary,
-            recording=recording,
+            recording=recording, repetitions=int(summary.get("repetitions") or 0),
         )  # fmt: skip
 
 

@@ -32,6 +32,7 @@ LEADING_COLUMNS = [
     "repetitions (count)",
     "repetitions passed (count)",
     "pain (0-10)",
+    "effort Borg CR10 (0-10)",
 ]
 ANGLE_COLUMNS = [f"{angle_label(name).lower()} range (°)" for name in ANGLE_NAMES]
 COLUMNS = [*LEADING_COLUMNS, *ANGLE_COLUMNS, "note"]
@@ -89,6 +90,7 @@ def history_row(recording: Recording, result: AnalysisSummary) -> list[Any]:
         result.repetition_count,
         passed_count(result),
         "" if recording.pain_score is None else recording.pain_score,
+        "" if recording.effort is None else recording.effort,
         *(round(angles[name].range, 2) if name in angles else "" for name in ANGLE_NAMES),
         spreadsheet_text(note_of(result)),
     ]

@@ -11,15 +11,20 @@ store existed) gets one on the way, in two more queries.
 from __future__ import annotations
 
 import json
+import math
+from collections import Counter
+from datetime import date, datetime, time, timedelta
 from typing import Any
 
 from django.db.models import Case, F, Q, TextField, When
 
 from analysis.clinical.labels import REGIONS, angle_label, region_of
+from analysis.clinical.norms import norm_for
 from webapp.api.numbers import utc_iso
 from webapp.patients.models import Patient
 from webapp.patients.progress_store import store_points
 from webapp.recordings.models import AnalysisRun, RunStatus
+from webapp.recordings.words import body_part
 
 # What may change after a run (the exercise's name, the pain score) is read from the recording.
 POINT_FIELDS = (
@@ -167,7 +172,129 @@ def _exercise_series(points: list[dict[str, Any]]) -> dict[str, Any]:
         for side in sides
     ]
     dates = [p["date"][:10] for p in points]
-    return {"dates": dates, "angles": angles, "workspace": workspace}
+    moments = [datetime.fromisoformat(p["date"]) for p in points]
+    shown = most_moved({a["name"]: a["range"] for a in angles})
+    return {
+        "dates": dates,
+        **session_axis(moments),
+        "angles": [{**a, "shown": a["name"] in shown} for a in angles],
+        "band": normal_band(shown),
+        "workspace": workspace,
+    }
+
+
+MAX_LINES = 4  # lines per chart: more and a chart no longer reads in a second
+DAY_MS = 86_400_000
+MAX_TICKS = 8
+
+
+def most_moved(series: dict[str, list[float | None]], count: int = MAX_LINES) -> list[str]:
+    """The names of the `count` series that reach the largest values (the angles or body parts
+    the exercise moves most), largest first."""
+    peak = {
+        name: max((v for v in values if v is not None), default=-1.0)
+        for name, values in series.items()
+    }
+    return sorted(peak, key=lambda name: (-peak[name], name))[:count]
+
+
+def session_x(moments: list[datetime]) -> list[str]:
+    """Where each session sits on a date axis: within its day, the sessions of that day spread
+    evenly (k-th of n at (k+1)/(n+1) of the day), so same-day sessions stand side by side
+    instead of on one vertical line."""
+    per_day = Counter(m.date() for m in moments)
+    seen: Counter = Counter()
+    placed = []
+    for moment in moments:
+        day = moment.date()
+        seen[day] += 1
+        offset = timedelta(days=seen[day] / (per_day[day] + 1))
+        placed.append(_stamp(datetime.combine(day, time.min) + offset))
+    return placed
+
+
+def date_axis(days: list[date]) -> dict[str, Any]:
+    """A date axis from the first to the last day with a margin: ticks on whole days, labelled
+    "12 Nov", at most MAX_TICKS of them, so one session never gives sub-second ticks."""
+    first, last = (min(days), max(days)) if days else (date.today(), date.today())
+    step = max(1, math.ceil(((last - first).days + 1) / MAX_TICKS))
+    start = datetime.combine(first, time.min) - timedelta(hours=6)  # no tick of the day before
+    end = datetime.combine(last, time.min) + timedelta(hours=30)
+    return {
+        "range": [_stamp(start), _stamp(end)],
+        "tick0": _stamp(datetime.combine(first, time(12))),
+        "dtick": step * DAY_MS,
+        "tickformat": "%-d %b",
+    }
+
+
+def session_axis(moments: list[datetime]) -> dict[str, Any]:
+    """The x of each session, its date and time in words (for the tooltip) and the date axis."""
+    return {
+        "x": session_x(moments),
+        "when": [f"{m:%-d %b %Y %H:%M}" for m in moments],
+        "axis": date_axis([m.date() for m in moments]),
+    }
+
+
+def _stamp(moment: datetime) -> str:
+    return moment.strftime("%Y-%m-%d %H:%M:%S")
+
+
+def normal_band(names: list[str]) -> dict[str, Any] | None:
+    """The normal adult range of motion (AAOS) of the angles shown, as a band from the smallest
+    to the largest of their full ranges (at least 4° tall, so one angle still shows)."""
+    ranges = []
+    for name in names:
+        try:
+            ranges.append(norm_for(name).range)
+        except KeyError:  # not a clinical angle: no published norm
+            continue
+    if not ranges:
+        return None
+    low, high = min(ranges), max(ranges)
+    if high - low < 4:
+        low, high = (low + high) / 2 - 2, (low + high) / 2 + 2
+    least, most = min(ranges), max(ranges)
+    figures = f"{least:g}°" if least == most else f"{least:g}–{most:g}°"
+    return {"low": low, "high": high, "text": f"normal adult range {figures}"}
+
+
+def exercise_charts(name: str, points: list[dict[str, Any]]) -> dict[str, Any]:
+    """One exercise's progress charts: one point per session placed by date, the score, the
+    repetitions, the pain, and the range of motion and level of the (up to) MAX_LINES body parts
+    the exercise moves most."""
+    rom = {
+        j: [p["range_of_motion"].get(j) for p in points]
+        for p in points
+        for j in p["range_of_motion"]
+    }
+    parts = most_moved(rom)
+    return {
+        "exercise": name,
+        **session_axis([datetime.fromisoformat(p["date"]) for p in points]),
+        "score": [p["score"] for p in points],
+        "repetitions": [p["repetitions"] for p in points],
+        "pain": [p["pain_score"] for p in points],
+        "rom": [{"label": body_part(j).capitalize(), "y": rom[j]} for j in parts],
+        "gamma": [
+            {"label": body_part(j).capitalize(), "y": [p["gamma"].get(j) for p in points]}
+            for j in parts
+        ],
+    }
+
+
+def progress_charts(patient: Patient) -> list[dict[str, Any]]:
+    """Per exercise (sessions of different exercises are never joined), `exercise_charts`; the
+    exercise with the most sessions first."""
+    by_exercise: dict[str, list[dict[str, Any]]] = {}
+    for point in patient_progress(patient):
+        by_exercise.setdefault(point["exercise_name"] or "Unknown exercise", []).append(point)
+    ordered = sorted(by_exercise.items(), key=lambda item: -len(item[1]))
+    return [
+        {"id": f"progress-{i}", **exercise_charts(name, points)}
+        for i, (name, points) in enumerate(ordered)
+    ]
 
 
 def _percent(share: float | None) -> float | None:

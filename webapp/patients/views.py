@@ -49,6 +49,8 @@ def with_adherence(patient: Patient) -> tuple[list, DaysWithData]:
 @login_required
 def patient_detail(request: HttpRequest, pk) -> HttpResponse:
     patient = get_patient_for_user(request, pk)
+    if request.user.is_patient:  # the patient's own pages say the same in their words
+        return redirect("dashboard:home")
     prescriptions, days = with_adherence(patient)
     context = {
         "patient": patient,

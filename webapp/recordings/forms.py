@@ -19,6 +19,22 @@ from webapp.recordings.uploads import (
     parse_upload,
 )
 
+# The Borg CR10 scale, asked in the patient's words (the upload form and the result page).
+EFFORT = {
+    "label": "How hard did it feel? (0 = no effort at all, 10 = the hardest possible)",
+    "help_text": "Borg CR10 scale, 0–10. Leave empty if you are not sure.",
+}
+
+
+class EffortForm(forms.ModelForm):
+    """The effort of one session, given on its result page when the upload did not say it."""
+
+    effort = forms.IntegerField(min_value=0, max_value=10, required=True, **EFFORT)
+
+    class Meta:
+        model = Recording
+        fields = ["effort"]
+
 
 class UploadForm(forms.Form):
     """Upload one recording. Validation parses the file, so a saved form is a usable recording."""
@@ -31,10 +47,20 @@ class UploadForm(forms.Form):
             "Leave empty to let the system recognise the exercise; you confirm its suggestion next."
         ),
     )
-    file = forms.FileField(help_text="A BVH recording (.bvh or .bvh.gz).")
+    file = forms.FileField(
+        help_text=(
+            "A motion-capture recording: BVH (.bvh, .bvh.gz), Kinect joint positions (.csv), "
+            "Azure Kinect or MediaPipe (.json), .trc or .c3d; or a phone video (.mp4, .mov, "
+            ".webm) of the whole body."
+        ),
+        widget=forms.ClearableFileInput(
+            attrs={"accept": ".bvh,.gz,.csv,.json,.trc,.c3d,.mp4,.mov,.webm"}
+        ),
+    )
     pain_score = forms.IntegerField(
         min_value=0, max_value=10, required=False, label="Pain (0 = none, 10 = worst)"
     )
+    effort = forms.IntegerField(min_value=0, max_value=10, required=False, **EFFORT)
     note = forms.CharField(
         widget=forms.Textarea(attrs={"rows": 3}), required=False, max_length=2000
     )
@@ -45,7 +71,9 @@ class UploadForm(forms.Form):
         self.fields["exercise"].queryset = exercises
         # A patient uploads for themselves: no list of patients to pick from.
         self.own_patient = own_patient
-        if own_patient is not None:
+        if own_patient is None:
+            del self.fields["effort"]  # how the session felt is the patient's own answer
+        else:
             del self.fields["patient"]
             self.fields["exercise"].help_text = (
                 "One of the exercises your therapist prescribed; leave empty to let the system "
@@ -61,7 +89,7 @@ class UploadForm(forms.Form):
 
     def clean_file(self):
         upload = self.cleaned_data["file"]
-        self.parsed = parse_upload(upload)
+        self.parsed = parse_upload(upload, any_source=True)
         return upload
 
     def clean(self):

@@ -15,6 +15,7 @@ import uuid
 from typing import TYPE_CHECKING
 
 from django.conf import settings
+from django.core.validators import MaxValueValidator, MinValueValidator
 from django.db import models
 from django.utils import timezone
 
@@ -66,6 +67,10 @@ class Recording(models.Model):
     fps = models.FloatField(default=0.0)
     duration_s = models.FloatField(default=0.0)
     pain_score = models.PositiveSmallIntegerField(null=True, blank=True)
+    # How hard the session felt to the patient, on the Borg CR10 scale (0 = nothing, 10 = maximal).
+    effort = models.PositiveSmallIntegerField(
+        null=True, blank=True, validators=[MinValueValidator(0), MaxValueValidator(10)]
+    )
     note = models.TextField(blank=True)
     uploaded_by = models.ForeignKey(
         settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True, related_name="+"

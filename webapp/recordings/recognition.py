@@ -14,7 +14,6 @@ from django.db.models import QuerySet
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import redirect, render
 
-from analysis.bvh import read
 from webapp.accounts.models import User
 from webapp.accounts.permissions import get_recording_for_user, visible_exercises
 from webapp.exercises.models import Exercise
@@ -23,7 +22,7 @@ from webapp.recordings.models import RecognitionState, Recording
 from webapp.recordings.prescribed import offered_exercises
 from webapp.recordings.recovery import analysable
 from webapp.recordings.storage import DamagedRecordingError, read_verified
-from webapp.recordings.uploads import check_skeleton
+from webapp.recordings.uploads import check_skeleton, stored_motion
 
 UNDER_WAY = (RecognitionState.QUEUED, RecognitionState.RUNNING)
 
@@ -42,7 +41,7 @@ class ConfirmForm(forms.Form):
             content = read_verified(self.recording)
         except DamagedRecordingError as error:
             raise forms.ValidationError(str(error)) from error
-        check_skeleton(read(content), exercise)
+        check_skeleton(stored_motion(self.recording.file.name, content), exercise)
         return exercise
 
 

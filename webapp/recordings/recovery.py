@@ -20,14 +20,13 @@ from django.db.models import QuerySet
 from django.http import HttpRequest
 from django.utils import timezone
 
-from analysis.bvh import read
 from webapp.audit import log as audit
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings import services
 from webapp.recordings.models import Recording
 from webapp.recordings.storage import DamagedRecordingError, read_verified
-from webapp.recordings.uploads import check_not_duplicate, check_skeleton
+from webapp.recordings.uploads import check_not_duplicate, check_skeleton, stored_motion
 
 log = logging.getLogger(__name__)
 
@@ -55,7 +54,7 @@ def check_fits(recording: Recording, exercise: Exercise) -> None:
         content = read_verified(recording)
     except DamagedRecordingError as error:
         raise ValidationError(str(error)) from error
-    check_skeleton(read(content), exercise)
+    check_skeleton(stored_motion(recording.file.name, content), exercise)
 
 
 def check_move(

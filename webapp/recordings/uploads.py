@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import gzip
 import hashlib
+import tempfile
 from dataclasses import dataclass
 
 from django.conf import settings
@@ -24,9 +25,11 @@ from analysis.bvh import (
     Motion,
     SkeletonMismatchError,
     check_recording,
-    read,
 )
 from analysis.kinematics import map_onto
+from analysis.sources import SUFFIXES, read_recording
+from analysis.sources.video import SUFFIXES as VIDEO_SUFFIXES
+from analysis.sources.video import VideoHeader, probe
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
@@ -35,7 +38,10 @@ from webapp.recordings.models import AnalysisRun, Recording
 from webapp.recordings.words import file_problem
 
 MIN_FRAMES = 10
-ACCEPTED_SUFFIXES = (".bvh", ".bvh.gz")
+VIDEO_JOINTS = 17  # the skeleton a video's landmarks are solved into (`analysis.sources.ik`)
+# BVH and the capture sources `analysis.sources` reads (Kinect .csv, Azure/MediaPipe .json, ...)
+ACCEPTED_SUFFIXES = SUFFIXES
+BVH_SUFFIXES = (".bvh", ".bvh.gz")
 # Caps for untrusted files, far above a clinical recording (a 30-minute UI-PRMD session at 30 fps
 # is 3.7 M values, 33 MB of text): they bound one upload's memory (~0.3 GB) and time (~1 s).
 MAX_DECOMPRESSED_BYTES = 96 << 20
@@ -45,15 +51,34 @@ CHECK_FRAMES = 60  # frames the skeleton check retargets
 
 @dataclass(frozen=True)
 class ParsedUpload:
+    """``motion``: the recording as read; None for a video, whose frames the worker reads (the
+    pose estimator takes about 30 ms a frame: the upload answers at once with ``video``, the
+    frame rate, size and count read from its header)."""
+
     content: bytes
     checksum: str
-    motion: Motion
+    motion: Motion | None
     original_name: str
+    kind: str = "bvh"  # the capture source (`analysis.sources.RecordingSource.kind`)
+    video: VideoHeader | None = None
 
     @property
     def warnings(self) -> tuple[str, ...]:
-        """What the reader bent to open the file, in plain words, for the upload page."""
+        """What the reader bent to open the file, in plain words, for the upload page (another
+        source's import notes are already sentences for the uploader)."""
+        if self.motion is None:
+            return ()
+        if self.kind != "bvh":
+            return self.motion.warnings
         return tuple(upload_notice(w) for w in self.motion.warnings)
+
+    @property
+    def suffix(self) -> str:
+        """The stored file's ending: the upload's real one, so the worker reads it the same way."""
+        name = self.original_name.lower()
+        if self.kind == "bvh" or not name.endswith(ACCEPTED_SUFFIXES):
+            return ".bvh.gz" if self.content[:2] == b"\x1f\x8b" else ".bvh"
+        return next(s for s in ACCEPTED_SUFFIXES if name.endswith(s))
 
 
 def upload_notice(warning: str) -> str:
@@ -70,29 +95,83 @@ def read_upload(upload: UploadedFile) -> bytes:
     return upload.read(limit + 1)
 
 
-def parse_upload(upload: UploadedFile) -> ParsedUpload:
-    """Check an uploaded file is a usable BVH recording; raise ValidationError saying why not."""
+def parse_upload(upload: UploadedFile, *, any_source: bool = False) -> ParsedUpload:
+    """Check an uploaded file is a usable recording; raise ValidationError saying why not.
+
+    ``any_source``: also the capture files `analysis.sources.read_recording` reads (patients'
+    recordings); without it BVH only (an exercise's tutor, which is stored and read as BVH).
+    """
     name = upload.name or "recording.bvh"
-    if not name.lower().endswith(ACCEPTED_SUFFIXES):
+    if not any_source and not name.lower().endswith(BVH_SUFFIXES):
         raise ValidationError("Upload a BVH motion-capture file (.bvh or .bvh.gz).")
+    if not name.lower().endswith(ACCEPTED_SUFFIXES):
+        raise ValidationError(
+            "Upload a BVH motion-capture file (.bvh or .bvh.gz) or another capture file: Kinect "
+            "joint positions (.csv), Azure Kinect or MediaPipe (.json), .trc, .c3d, or a video "
+            "(.mp4, .mov, .webm)."
+        )
     content = read_upload(upload)
     if len(content) > settings.MAX_UPLOAD_BYTES:
         raise ValidationError("The file is larger than the upload limit.")
+    if is_video(name):
+        return parse_video(content, name)
     try:
-        motion = read(
+        imported = read_recording(
+            name,
             content,
             max_bytes=getattr(settings, "MAX_UPLOAD_DECOMPRESSED_BYTES", MAX_DECOMPRESSED_BYTES),
             max_values=getattr(settings, "MAX_UPLOAD_FRAME_VALUES", MAX_FRAME_VALUES),
         )
     except (BVHError, gzip.BadGzipFile, EOFError, UnicodeDecodeError) as error:
         problem = file_problem(str(error))  # the reader's words made plain ("values", not channels)
-        raise ValidationError(f"This is not a readable BVH file: {problem}") from error
+        what = "BVH file" if imported_kind(name) == "bvh" else "capture file"
+        raise ValidationError(f"This is not a readable {what}: {problem}") from error
+    motion = imported.motion
     if motion.frames.shape[0] < MIN_FRAMES:
         raise ValidationError(
             f"The recording has {motion.frames.shape[0]} frames; at least {MIN_FRAMES} are needed."
         )
     check_plausible(motion)
-    return ParsedUpload(content, hashlib.sha256(content).hexdigest(), motion, name)
+    checksum = hashlib.sha256(content).hexdigest()
+    return ParsedUpload(content, checksum, motion, name, imported.report.kind)
+
+
+def is_video(name: str) -> bool:
+    return name.lower().endswith(VIDEO_SUFFIXES)
+
+
+def parse_video(content: bytes, name: str) -> ParsedUpload:
+    """A video is checked by its header only (frame rate, size, length); the worker finds the
+    person in its frames, with progress, and refuses it there if nobody is seen."""
+    suffix = next(s for s in VIDEO_SUFFIXES if name.lower().endswith(s))
+    with tempfile.NamedTemporaryFile(suffix=suffix) as handle:
+        handle.write(content)
+        handle.flush()
+        try:
+            header = probe(handle.name)
+        except BVHError as error:
+            raise ValidationError(str(error)) from error
+    seconds = header.frames / header.fps
+    if header.frames < MIN_FRAMES or seconds < 1.0:
+        raise ValidationError(
+            f"The video lasts {seconds:.1f} s; at least 1 s is needed to hold one repetition."
+        )
+    checksum = hashlib.sha256(content).hexdigest()
+    return ParsedUpload(content, checksum, None, name, "video", header)
+
+
+def stored_motion(name: str, content: bytes) -> Motion | None:
+    """A stored recording read back for a skeleton check; None for a video (its skeleton is the
+    one every video gets, which maps onto any exercise's; reading its frames takes the worker
+    a while)."""
+    if is_video(name):
+        return None
+    return read_recording(name, content).motion
+
+
+def imported_kind(name: str) -> str:
+    """The kind a file name announces: "bvh" or "other" (for the words of a reading error)."""
+    return "bvh" if name.lower().endswith(BVH_SUFFIXES) else "other"
 
 
 def check_plausible(motion: Motion, exercise: Exercise | None = None) -> None:
@@ -109,10 +188,13 @@ def check_plausible(motion: Motion, exercise: Exercise | None = None) -> None:
         raise ValidationError(str(error)) from error
 
 
-def check_skeleton(motion: Motion, exercise: Exercise) -> None:
+def check_skeleton(motion: Motion | None, exercise: Exercise) -> None:
     """The recording must map onto the exercise tutor's skeleton: the same rig, or another rig
     whose body parts are recognised (`analysis.kinematics.map_onto`, as the analysis itself does;
-    a few frames suffice to check, the analysis maps them all)."""
+    a few frames suffice to check, the analysis maps them all). None: a video, whose skeleton
+    the worker makes, always of the body parts every rig's are mapped from."""
+    if motion is None:
+        return
     check_plausible(motion, exercise)
     tutor = exercise.tutor_motion()
     try:
@@ -128,6 +210,14 @@ def check_not_duplicate(patient: Patient, checksum: str) -> None:
     if earlier is not None:
         when = timezone.localtime(earlier.uploaded_at).strftime("%d %b %Y %H:%M")
         raise ValidationError(f"This file was already uploaded for this patient on {when}.")
+
+
+def recording_size(parsed: ParsedUpload) -> tuple[int, float]:
+    """Frames and frames per second, from the motion or, for a video, its header."""
+    if parsed.motion is None:
+        assert parsed.video is not None  # parse_video gives every video its header
+        return parsed.video.frames, parsed.video.fps
+    return parsed.motion.frames.shape[0], 1.0 / parsed.motion.frame_time
 
 
 def pending_excluded(recordings):
@@ -169,7 +259,7 @@ def store_recording(
     recording = new_recording(
         parsed, patient=patient, exercise=exercise, user=user, pain_score=pain_score, note=note
     )
-    suffix = ".bvh.gz" if parsed.content[:2] == b"\x1f\x8b" else ".bvh"
+    suffix = parsed.suffix
     try:
         with transaction.atomic():
             recording.file.save(f"{recording.pk}{suffix}", ContentFile(parsed.content), save=False)
@@ -210,7 +300,7 @@ def reuse_pending(
 
 
 def new_recording(parsed: ParsedUpload, *, patient, exercise, user, pain_score, note) -> Recording:
-    motion = parsed.motion
+    frames, fps = recording_size(parsed)
     return Recording(
         clinic=patient.clinic,
         patient=patient,
@@ -218,10 +308,10 @@ def new_recording(parsed: ParsedUpload, *, patient, exercise, user, pain_score, 
         checksum=parsed.checksum,
         original_name=parsed.original_name[:255],
         size_bytes=len(parsed.content),
-        n_frames=motion.frames.shape[0],
-        n_joints=len(motion.skeleton.names),
-        fps=1.0 / motion.frame_time,
-        duration_s=motion.frames.shape[0] * motion.frame_time,
+        n_frames=frames,
+        n_joints=len(parsed.motion.skeleton.names) if parsed.motion is not None else VIDEO_JOINTS,
+        fps=fps,
+        duration_s=frames / fps,
         pain_score=pain_score,
         note=note,
         uploaded_by=user,

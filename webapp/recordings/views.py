@@ -14,6 +14,7 @@ from webapp.accounts.permissions import (
     get_recording_for_user,
     require_staff,
 )
+from webapp.dashboard import patient_result
 from webapp.recordings import recovery_views, services, warmup
 from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import UploadForm, upload_choices
@@ -45,6 +46,9 @@ def upload(request: HttpRequest) -> HttpResponse:
             pain_score=data["pain_score"],
             note=data["note"],
         )
+        if data.get("effort") is not None:  # asked of patients only; store_recording predates it
+            recording.effort = data["effort"]
+            recording.save(update_fields=["effort"])
         if recording.exercise_id is None:  # recognised by a worker; confirmed on its page
             messages.info(request, "Recording uploaded. Please confirm which exercise it is below.")
             return redirect("recordings:detail", pk=recording.pk)
@@ -60,6 +64,8 @@ def upload(request: HttpRequest) -> HttpResponse:
 @login_required
 def detail(request: HttpRequest, pk) -> HttpResponse:
     recording = get_recording_for_user(request, pk)
+    if request.user.is_patient:  # a lay result page, not the therapist's technical one
+        return patient_result.page(request, recording)
     runs = list(recording.runs.all())
     context = {"recording": recording, "run": runs[0] if runs else None, "runs": runs}
     context["notes"] = notes_of(recording)

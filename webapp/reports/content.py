@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from datetime import date
+from datetime import date, datetime
 from typing import Any
 
 from django.utils import timezone
 
 from webapp.patients.goals import patient_goal_statuses
-from webapp.patients.progress import patient_progress
+from webapp.patients.progress import MAX_LINES, most_moved, patient_progress, session_x
 from webapp.recordings.notes import note_lines
 from webapp.recordings.words import body_part, key_pose_name
 from webapp.reports import playback
@@ -16,7 +16,7 @@ from webapp.reports.clinical import clinical_content
 from webapp.reports.timeline import timeline
 
 MAX_POSES = 4
-MAX_ROM_LINES = 5  # body parts per exercise chart (a legend of more is unreadable)
+MAX_ROM_LINES = MAX_LINES  # body parts per exercise chart: the ones the exercise moves most
 
 
 def fmt(value: Any, digits: int = 0) -> str:
@@ -98,25 +98,49 @@ def parse_day(value: str | None) -> date | None:
         return None
 
 
+def session_days(points: list[dict]) -> tuple[date | None, list[float]]:
+    """The report's first day and each session's place on a day axis (days since that day's
+    midnight; the sessions of one day spread within it, as on the progress page)."""
+    moments = [datetime.fromisoformat(p["date"]) for p in points]
+    if not moments:
+        return None, []
+    first = min(m.date() for m in moments)
+    start = datetime.combine(first, datetime.min.time())
+    placed = [datetime.fromisoformat(x) for x in session_x(moments)]
+    return first, [round((x - start).total_seconds() / 86400.0, 4) for x in placed]
+
+
 def series_by_exercise(points: list[dict], field: str) -> dict[str, list[tuple[float, float]]]:
+    """Per exercise, (day, value) of each session with a value; the MAX_LINES exercises with the
+    most sessions (x: days since the report's first day)."""
+    _, days = session_days(points)
     series: dict[str, list[tuple[float, float]]] = {}
-    for i, point in enumerate(points):
+    for day, point in zip(days, points, strict=True):
         if point.get(field) is not None:
-            series.setdefault(point["exercise_name"] or "?", []).append((i + 1, point[field]))
-    return series
+            series.setdefault(point["exercise_name"] or "?", []).append((day, point[field]))
+    kept = sorted(series, key=lambda name: -len(series[name]))[:MAX_LINES]
+    return {name: series[name] for name in series if name in kept}
 
 
 def rom_series(points: list[dict]) -> dict[str, dict[str, list[tuple[float, float]]]]:
-    """Per exercise, the range of motion of (up to) five body parts over the sessions: a line
-    only ever joins sessions of one exercise (x: the session's number in the report)."""
+    """Per exercise, the range of motion of the (up to) MAX_ROM_LINES body parts it moves most
+    over the sessions: a line only ever joins sessions of one exercise (x: days since the
+    report's first day)."""
+    _, days = session_days(points)
     charts: dict[str, dict[str, list[tuple[float, float]]]] = {}
-    for i, point in enumerate(points):
+    for day, point in zip(days, points, strict=True):
         series = charts.setdefault(point.get("exercise_name") or "Unknown exercise", {})
         for joint, value in (point.get("range_of_motion") or {}).items():
-            label = body_part(joint)
-            if label in series or len(series) < MAX_ROM_LINES:
-                series.setdefault(label, []).append((i + 1, float(value)))
-    return charts
+            series.setdefault(joint, []).append((day, float(value)))
+    return {
+        exercise: {
+            body_part(joint): series[joint]
+            for joint in most_moved(
+                {j: [v for _, v in line] for j, line in series.items()}, MAX_ROM_LINES
+            )
+        }
+        for exercise, series in charts.items()
+    }
 
 
 def progress_content(patient, since: date | None, until: date | None) -> dict[str, Any]:
@@ -140,6 +164,7 @@ def progress_content(patient, since: date | None, until: date | None) -> dict[st
             ]
             for p in points
         ],
+        "first_day": session_days(points)[0],
         "score_series": series_by_exercise(points, "score"),
         "rom_series": rom_series(points),
         "goals": goal_rows(patient),

@@ -7,17 +7,26 @@ Both take plain data (built by `webapp.reports.content`) so they are easy to tes
 from __future__ import annotations
 
 import io
+from datetime import date, timedelta
 from typing import Any
 
 import numpy as np
 from reportlab.graphics.charts.barcharts import VerticalBarChart
 from reportlab.graphics.charts.lineplots import LinePlot
-from reportlab.graphics.shapes import Circle, Drawing, Line, String
+from reportlab.graphics.shapes import Circle, Drawing, Group, Line, String
+from reportlab.graphics.widgets.markers import makeMarker
 from reportlab.lib import colors
 from reportlab.lib.pagesizes import A4
 from reportlab.lib.styles import getSampleStyleSheet
 from reportlab.lib.units import cm
-from reportlab.platypus import Paragraph, SimpleDocTemplate, Spacer, Table, TableStyle
+from reportlab.platypus import (
+    CondPageBreak,
+    Paragraph,
+    SimpleDocTemplate,
+    Spacer,
+    Table,
+    TableStyle,
+)
 
 from webapp.recordings.words import LEVEL_HELP
 from webapp.reports.clinical import clinical_flowables
@@ -67,30 +76,75 @@ def bar_chart(values: list[float], labels: list[str], title: str) -> Drawing:
     return drawing
 
 
+CHART_W, CHART_H = 16 * cm, 8 * cm
+PLOT_LEFT, PLOT_BOTTOM = 52, 40  # room for the tick labels, the axis titles beside them
+LEGEND_TOP = 26  # from the top: under the title, above the plot
+MAX_TICKS = 8
+
+
+def day_ticks(first: float, last: float) -> list[float]:
+    """Tick places at the middle of whole days (at most MAX_TICKS), so labels name days."""
+    lo, hi = int(first // 1), int(last // 1)
+    step = max(1, -(-(hi - lo + 1) // MAX_TICKS))
+    return [day + 0.5 for day in range(lo, hi + 1, step)]
+
+
 def line_chart(
-    series: dict[str, list[tuple[float, float]]], title: str, y_title: str = ""
+    series: dict[str, list[tuple[float, float]]],
+    title: str,
+    y_title: str,
+    first_day: date | None,
+    y_range: tuple[float, float] | None = None,
 ) -> Drawing:
-    """One line per series (x: session number), with axis titles and a legend of five."""
-    drawing = Drawing(16 * cm, 6.5 * cm)
+    """One line per series over the session dates (x: days since `first_day`, labelled
+    "12 Nov"); the title on top, the legend (up to four, two per row) under it, the plot below,
+    the y title turned along the axis and the x title under the dates: nothing overlaps."""
+    drawing = Drawing(CHART_W, CHART_H)
     names = [name for name, points in series.items() if points]
+    legend_rows = (min(len(names), 4) + 1) // 2
     plot = LinePlot()
-    plot.x, plot.y, plot.width, plot.height = 40, 40, 11 * cm, 4.4 * cm
-    plot.data = [series[name] for name in names] or [[(0, 0)]]
-    sessions = sorted({x for line in plot.data for x, _ in line})
-    plot.xValueAxis.valueSteps = sessions[:: max(1, len(sessions) // 12)]  # whole sessions only
+    plot.x, plot.y = PLOT_LEFT, PLOT_BOTTOM
+    plot.width = CHART_W - PLOT_LEFT - 12
+    plot.height = CHART_H - PLOT_BOTTOM - LEGEND_TOP - 12 * legend_rows - 8
+    plot.data = [series[name] for name in names] or [[(0.5, 0)]]
+    xs = [x for line in plot.data for x, _ in line]
+    plot.xValueAxis.valueMin = min(xs) // 1 - 0.25
+    plot.xValueAxis.valueMax = max(xs) // 1 + 1.25
+    plot.xValueAxis.valueSteps = day_ticks(min(xs), max(xs))
+    start = first_day or date.today()
+    plot.xValueAxis.labelTextFormat = lambda x: f"{start + timedelta(days=int(x)):%-d %b}"
+    plot.xValueAxis.labels.fontSize = plot.yValueAxis.labels.fontSize = 8
+    plot.yValueAxis.valueMin = 0  # scores and ranges of motion start at nothing
+    if y_range:
+        plot.yValueAxis.valueMin, plot.yValueAxis.valueMax = y_range
     for i in range(len(plot.data)):
         plot.lines[i].strokeColor = PALETTE[i % len(PALETTE)]
         plot.lines[i].strokeWidth = 1.5
+        plot.lines[i].symbol = _marker(PALETTE[i % len(PALETTE)])
     drawing.add(plot)
-    drawing.add(String(40, 6.5 * cm - 12, title, fontSize=10))
-    drawing.add(String(40 + 5.5 * cm, 8, "session (number in this report)", fontSize=8))
-    if y_title:
-        drawing.add(String(4, 40 + 4.4 * cm + 6, y_title, fontSize=8))
-    for i, name in enumerate(names[:5]):
-        y = 6.5 * cm - 30 - 12 * i
-        drawing.add(Line(12.6 * cm, y + 3, 13.2 * cm, y + 3, strokeColor=PALETTE[i]))
-        drawing.add(String(13.4 * cm, y, name[:22], fontSize=8))
+    drawing.add(String(PLOT_LEFT, CHART_H - 12, title, fontSize=10))
+    drawing.add(String(PLOT_LEFT + plot.width / 2, 4, "date of the session", fontSize=8,
+                       textAnchor="middle"))  # fmt: skip
+    drawing.add(_turned(y_title, 10, PLOT_BOTTOM + plot.height / 2))
+    for i, name in enumerate(names[:4]):
+        x = PLOT_LEFT + (i % 2) * (plot.width / 2)
+        y = CHART_H - LEGEND_TOP - 12 * (i // 2)
+        drawing.add(Line(x, y + 3, x + 14, y + 3, strokeColor=PALETTE[i], strokeWidth=1.5))
+        drawing.add(String(x + 18, y, name[:40], fontSize=8))
     return drawing
+
+
+def _marker(color: colors.Color) -> Any:
+    marker = makeMarker("FilledCircle")
+    marker.size, marker.fillColor, marker.strokeColor = 3, color, color
+    return marker
+
+
+def _turned(text: str, x: float, y: float) -> Group:
+    """A y-axis title written upwards along the axis, centred on (x, y)."""
+    group = Group(String(0, 0, text, fontSize=8, textAnchor="middle"))
+    group.transform = (0, 1, -1, 0, x, y)
+    return group
 
 
 def pose_drawing(poses: list[tuple[str, np.ndarray]], parents: list[int]) -> Drawing:
@@ -187,7 +241,7 @@ def goals_flowables(content: dict[str, Any]) -> list[Any]:
     head = ["Exercise", "Goal", "Latest", "Status"]
     rows = [[small(cell) for cell in row] for row in content["goals"]]
     widths = [3.2 * cm, 8.2 * cm, 2 * cm, 3.6 * cm]
-    return [paragraph("Goals", "Heading2"), table([head, *rows], widths=widths)]
+    return table_section("Goals", table([head, *rows], widths=widths))
 
 
 def progress_pdf(content: dict[str, Any]) -> bytes:
@@ -198,13 +252,21 @@ def progress_pdf(content: dict[str, Any]) -> bytes:
     if not rows:
         story.append(paragraph("No analysed recordings in this period."))
         return build(story + goals_flowables(content), content["title"])
-    story.append(line_chart(content["score_series"], "Score by session", "score (0–100)"))
+    first = content.get("first_day")
+    story.append(
+        line_chart(content["score_series"], "Score by session", "score (0–100)", first, (0, 100))
+    )
     for exercise, series in content["rom_series"].items():
         if series:
             title = f"{exercise}: range of motion by session"
-            story.append(line_chart(series, title, "range of motion (degrees)"))
-    story.append(paragraph("Sessions", "Heading2"))
+            story.append(line_chart(series, title, "range of motion (°)", first))
     head = ["Date", "Exercise", "Score (0–100)", "Repetitions", "Pain (0–10)"]
-    story.append(table([head, *rows]))
+    story += table_section("Sessions", table([head, *rows]))
     story += goals_flowables(content)
     return build(story, content["title"])
+
+
+def table_section(heading: str, body: Table) -> list[Any]:
+    """A heading and its table that never start with a lone row at a page's foot: a new page
+    unless a good part of the table fits there (the header row repeats on every page)."""
+    return [CondPageBreak(6 * cm), paragraph(heading, "Heading2"), body]

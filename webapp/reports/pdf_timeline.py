@@ -1,5 +1,6 @@
 """The recording's timeline drawn for the PDF: repetitions with pass/fail, guidance and the three
-key-pose layers (as found, moved by refining, removed or added by the order check), in seconds.
+key-pose layers (found, moved by refining, removed or added by periodic analysis), in seconds,
+labelled in a therapist's words.
 
 Takes the plain dict of `webapp.reports.timeline.timeline`.
 """
@@ -18,7 +19,13 @@ ROW, GAP = 12, 5
 TYPE_COLOURS = [colors.HexColor(c) for c in ("#0969da", "#bf3989", "#1a7f37", "#9a6700", "#8250df")]
 PASSED, FAILED = colors.HexColor("#cde8d5"), colors.HexColor("#f6d2cf")
 GUIDANCE, REMOVED, ADDED = (colors.HexColor(c) for c in ("#d4772c", "#cf222e", "#1a7f37"))
-ROWS = ("Repetitions", "Guidance", "Key poses as found", "Moved by refining", "Order check")
+# Two lines under the axis: what the last three rows mean, in a therapist's words.
+LEGEND = (
+    "Exercise's order: x = key pose removed, + = key pose added, so the key poses come in the "
+    "exercise's order.",
+    "Adjusted key poses: moved to the nearest clear position. Colours: kinds of key pose.",
+)
+ROWS = ("Repetitions", "Guidance", "Key poses found", "Adjusted key poses", "Exercise's order")
 
 
 def fitted(text: str, room: float, size: float = 7) -> str:
@@ -33,7 +40,7 @@ def fitted(text: str, room: float, size: float = 7) -> str:
 class _Canvas:
     def __init__(self, line: dict[str, Any]) -> None:
         self.line = line
-        self.height = len(ROWS) * (ROW + GAP) + 76
+        self.height = len(ROWS) * (ROW + GAP) + 76 + 9 * (len(LEGEND) - 1)
         self.drawing = Drawing(WIDTH, self.height)
 
     def x(self, percent: float) -> float:
@@ -70,10 +77,8 @@ class _Canvas:
             self.drawing.add(String(x, y - 11, f"{t:g}", fontSize=7, textAnchor="middle"))
         self.drawing.add(String((LEFT + RIGHT) / 2, y - 21, "time (s)", fontSize=8,
                                 textAnchor="middle"))  # fmt: skip
-        legend = (
-            "Order check: x = key pose removed, + = key pose added. Colours: kinds of key pose."
-        )
-        self.drawing.add(String(0, y - 33, legend, fontSize=7, fillColor=colors.grey))
+        for k, legend in enumerate(LEGEND):
+            self.drawing.add(String(0, y - 33 - 9 * k, legend, fontSize=7, fillColor=colors.grey))
 
 
 def type_colour(kind: int):

@@ -1,8 +1,9 @@
 """The timeline of one analysed recording, in plain words and seconds, for the page and the PDF.
 
-Three key-pose layers (as found by the classifier, moved or chosen by refining, removed or added
-by the order check of periodic landmark sequence analysis), the repetitions with pass/fail against
-the threshold of the run, and the guidance of each repetition with the stretch it applies to.
+Three key-pose layers (found by the classifier, moved or chosen by refining, removed or added by
+periodic landmark sequence analysis, each labelled in a therapist's words), the repetitions with
+pass/fail against the threshold of the run, and the guidance of each repetition with the stretch
+it applies to.
 """
 
 from __future__ import annotations
@@ -23,9 +24,9 @@ GUIDANCE_WORDS = {
     "incomplete": "did not reach far enough",
 }
 LAYERS = (
-    ("identified", "key poses as found"),
-    ("refined", "key poses moved by refining"),
-    ("periodic", "removed or added by the order check"),
+    ("identified", "key poses the analysis found"),
+    ("refined", "key poses adjusted to the nearest clear position"),
+    ("periodic", "key poses removed or added so they come in the exercise's order"),
 )
 FALLBACK_NOTE = (
     "The key poses did not form a repeating cycle, so the repetitions were cut from the "

@@ -9,7 +9,7 @@ from __future__ import annotations
 from django.contrib.auth.decorators import login_required
 from django.core.files.storage import default_storage
 from django.http import FileResponse, HttpRequest, HttpResponse, JsonResponse
-from django.shortcuts import render
+from django.shortcuts import redirect, render
 
 from webapp.accounts.permissions import get_patient_for_user, get_recording_for_user
 from webapp.audit import log
@@ -96,6 +96,8 @@ def period(request: HttpRequest):
 @login_required
 def progress_page(request: HttpRequest, pk) -> HttpResponse:
     patient = get_patient_for_user(request, pk)
+    if request.user.is_patient:  # their own progress page, in their words
+        return redirect("dashboard:my-progress")
     prescribed = list(patient.prescriptions.select_related("exercise"))
     prescriptions = [
         {

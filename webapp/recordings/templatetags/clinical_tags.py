@@ -6,6 +6,7 @@ from __future__ import annotations
 from django import template
 
 from webapp.recordings.clinical import clinical_context
+from webapp.recordings.sources import SourceReliability, source_reliability
 
 register = template.Library()
 
@@ -22,6 +23,12 @@ def clinical_progress_of(patient) -> list:
     from webapp.patients.progress import clinical_progress
 
     return clinical_progress(patient)
+
+
+@register.filter
+def reliability(result) -> SourceReliability:
+    """How far the angles of this recording's capture source can be trusted, in words."""
+    return source_reliability(result.source)
 
 
 @register.filter

@@ -10,7 +10,7 @@ from webapp.reports import timeline as build
 
 register = template.Library()
 
-# What the worker reports besides the pipeline's own stage labels.
+# What the worker reports besides the pipeline's own stage labels (run_status.js keeps the same).
 STAGE_WORDS = {"loading": "loading the recording", "done": "saving the result"}
 
 

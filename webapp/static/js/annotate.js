@@ -186,7 +186,7 @@ function keyPosePage(box) {
     const joints = document.getElementById("joints");
     for (const name of data.movement_order) jointSelect.append(new Option(label(name), name));
     jointSelect.selectedIndex = 0; // the body part that moves most
-    for (const name of data.joints) {
+    for (const name of data.body_parts || data.joints) { // each body part once
       const row = document.createElement("label");
       const tick = Object.assign(document.createElement("input"), { type: "checkbox", value: name,
         checked: data.involved_joints.includes(name) });
