@@ -15,7 +15,7 @@ from analysis.kinematics.forward_kinematics import positions, rotations
 from analysis.sources import CaptureFileError, motion_from_landmarks, read_recording
 from analysis.sources.ik import NAMES, UNITS_PER_METRE
 from analysis.sources.names import MEDIAPIPE
-from analysis.sources.samples import LAYOUTS, kinect_long_csv, write_layout
+from tests.capture_samples import LAYOUTS, kinect_long_csv, write_layout
 
 FIXTURES = Path(__file__).parent / "fixtures" / "capture"
 TRC = FIXTURES / "pose2sim_balancing.trc"

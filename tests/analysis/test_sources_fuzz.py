@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 
 from analysis.bvh import BVHError
 from analysis.sources import read_recording
-from analysis.sources.samples import SUFFIX, write_layout
 from tests.analysis.test_sources_formats import standing
+from tests.capture_samples import SUFFIX, write_layout
 
 EXAMPLES = int(os.environ.get("CAPTURE_FUZZ_EXAMPLES", "60"))  # per text format
 C3D_EXAMPLES = max(3, EXAMPLES // 20)

@@ -24,7 +24,7 @@ from analysis.pipeline.model import build_model
 from analysis.pipeline.run import analyse
 from analysis.sources import read_recording
 from analysis.sources.ik import JOINTS, UNITS_PER_METRE
-from analysis.sources.samples import LAYOUTS, canonical_points, write_layout
+from tests.capture_samples import LAYOUTS, canonical_points, write_layout
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "data" / "ui-prmd"

@@ -14,7 +14,7 @@ from django.urls import reverse
 from rest_framework.test import APIClient
 
 from analysis.bvh import read
-from analysis.sources.samples import canonical_points, kinect_wide_csv, trc
+from tests.capture_samples import canonical_points, kinect_wide_csv, trc
 from tests.personas import fixture_bytes, make_exercise
 from webapp.recordings.models import AnalysisRun, Recording
 from webapp.recordings.uploads import parse_upload
