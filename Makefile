@@ -92,7 +92,7 @@ bench-browser: deps
 	E2E_DOCS=1 $(BIN)/python -m pytest tests/e2e -q
 
 # Long fuzzing run of the BVH parser, the upload endpoints and `analyse` on hostile files (the
-# suite runs a fixed-seed 8,400 + 1,600 cases and 2,000 hostile files); FUZZ_EXAMPLES,
+# suite runs a fixed-seed 8,400 + 1,600 cases and 1,000 hostile files); FUZZ_EXAMPLES,
 # FUZZ_UPLOAD_EXAMPLES, HOSTILE_COUNT and HOSTILE_SEED set the counts and the seed.
 # Every UI-PRMD development session (s01-s07) in every capture layout (Kinect CSV wide and long,
 # Azure JSON, .trc, C3D, MediaPipe JSON) against the BVH's own analysis; prints one line per pair.
@@ -105,7 +105,7 @@ fuzz: $(VENV)/.stamp-python
 	$(BIN)/python -m tests.hostile_run --count $${HOSTILE_COUNT:-100000} --seed $${HOSTILE_SEED:-$$(date +%s)}
 
 # `analyse` on 10,000 fixed-seed hostile files, each in its own process (about 5 minutes on two
-# cores); prints the summary line the suite's 2,000-file test checks.
+# cores); prints the summary line the suite's 1,000-file test checks.
 hostile: $(VENV)/.stamp-python
 	$(BIN)/python -m tests.hostile_run --count $${HOSTILE_COUNT:-10000} --seed $${HOSTILE_SEED:-25}
 

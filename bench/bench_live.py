@@ -17,6 +17,10 @@ created through ``POST /api/v1/live-sessions/``, against a real server process:
 ``--batch K`` sends K frames per message (``{"type": "frames", ...}``, as ``python -m analysis
 stream --server`` does: 3 at 120 frames/s); the latency of every frame of a batch is counted
 from the time its first frame was due, so the wait for the batch's other frames is in it.
+``--frames json,binary`` measures both forms of a frame message in one run, JSON text and
+binary float32 (`analysis.live.frames`, what ``stream --server`` sends to a server that reads
+it), each configuration with each form, so the server's processor time per frame and the
+largest N of the two can be set side by side.
 
 Per frame that gets an answer (the aligner thins a 120 Hz stream to the exercise model's 30
 frames a second, so every fourth frame is aligned and answered with a position event), the
@@ -28,7 +32,8 @@ p95 passes 50 ms or a frame is lost; the table gives each step and the largest N
 The clients run in one process on the same machine as the server.
 
     .venv/bin/python -m bench.bench_live [--servers runserver,redis,uvicorn] [--counts 10,20,35]
-        [--seconds 10] [--batch 3] [--processes 2] [--redis-db 14] [--markdown FILE]
+        [--seconds 10] [--batch 3] [--processes 2] [--frames json,binary] [--redis-db 14]
+        [--markdown FILE]
 
 ``--aligner`` also prints the in-process aligner's time per frame (``stream --model``).
 """
@@ -53,6 +58,7 @@ from pathlib import Path
 
 import numpy as np
 
+from analysis.live.frames import decode_frames, encode_frames
 from bench.nginx_proxy import free_port, start_proxy
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -105,10 +111,10 @@ from django.core.management import call_command
 call_command("migrate", verbosity=0, interactive=False)
 from tests.personas import make_exercise, make_world
 from webapp.accounts.tokens import issue_token
-from workers.exercise_models import active_model
+from workers.exercise_models import load_or_build
 w = make_world()
 exercise = make_exercise(w.clinic, "Shoulder abduction", "%s")
-active_model(exercise)  # fitted and stored now, so the server only loads it
+load_or_build(exercise)  # fitted and stored now, so the server only loads it
 _, key = issue_token(w.therapist, "bench")
 print(json.dumps({"token": key, "patient": str(w.patient.pk), "exercise": str(exercise.pk)}))
 """
@@ -193,20 +199,30 @@ class Recording120:
     header: str
     frames: list[list[float]]  # each frame's values
     batch: int = 1
-    messages: list[tuple[int, str]] = field(default_factory=list)  # (first seq, JSON text)
+    binary: bool = False  # float32 binary messages instead of JSON text
+    messages: list[tuple[int, str | bytes]] = field(default_factory=list)  # (first seq, message)
 
     def __post_init__(self) -> None:
         for first in range(0, len(self.frames), self.batch):
             part = self.frames[first : first + self.batch]
-            body = (
-                {"type": "frame", "seq": first, "values": part[0]}
-                if self.batch == 1
-                else {"type": "frames", "seq": first, "frames": part}
-            )
-            self.messages.append((first, json.dumps(body)))
+            self.messages.append((first, self.message(first, part)))
+
+    def message(self, first: int, part: list[list[float]]) -> str | bytes:
+        if self.binary:
+            return encode_frames(first, np.array(part))
+        body = (
+            {"type": "frame", "seq": first, "values": part[0]}
+            if self.batch == 1
+            else {"type": "frames", "seq": first, "frames": part}
+        )
+        return json.dumps(body)
+
+    @property
+    def form(self) -> str:
+        return "binary" if self.binary else "JSON"
 
 
-def recording_120(seconds: float, fps: float, batch: int) -> Recording120:
+def recording_120(seconds: float, fps: float, batch: int, binary: bool = False) -> Recording120:
     from analysis.bvh import read
     from analysis.kinematics import resample
     from analysis.live import header_text
@@ -214,7 +230,7 @@ def recording_120(seconds: float, fps: float, batch: int) -> Recording120:
     motion = resample(read(DATA / SESSION), fps)
     n = min(motion.n_frames, int(seconds * fps))
     frames = [[round(v, 4) for v in row] for row in motion.frames[:n].tolist()]
-    return Recording120(header_text(motion), frames, batch)
+    return Recording120(header_text(motion), frames, batch, binary)
 
 
 @dataclass
@@ -287,7 +303,7 @@ async def run_clients(
     ``processes`` (``bases`` unless given: a proxy's processes are warmed directly)."""
     token = world["token"]
     # one short session per process first, unmeasured: it loads the model and compiled kernels
-    warm = Recording120(rec.header, rec.frames[: int(fps)], rec.batch)
+    warm = Recording120(rec.header, rec.frames[: int(fps)], rec.batch, rec.binary)
     for base in processes or bases:
         url = base.replace("http://", "ws://") + create_session(base, world)
         await client(url, token, warm, fps, time.perf_counter())
@@ -317,7 +333,8 @@ def label(kind: str, ctx: Context) -> str:
         name += f", {ctx.processes} processes"
     if ctx.proxy:
         name += " behind nginx"
-    return f"{name}, {ctx.rec.batch} frame{'s' if ctx.rec.batch > 1 else ''}/message"
+    plural = "s" if ctx.rec.batch > 1 else ""
+    return f"{name}, {ctx.rec.batch} frame{plural}/message, {ctx.rec.form}"
 
 
 def measure(kind: str, n: int, ctx: Context) -> Step:
@@ -401,7 +418,7 @@ def report(steps: list[Step], args: argparse.Namespace, load: str) -> str:
         "the message period, as independent capture systems would.",
         f"Command: `.venv/bin/python -m bench.bench_live --servers {args.servers} --counts "
         f"{args.counts} --seconds {args.seconds:g} --batch {args.batch} --processes "
-        f"{args.processes}{' --proxy' if args.proxy else ''}`.",
+        f"{args.processes} --frames {args.frames}{' --proxy' if args.proxy else ''}`.",
         "",
         f"Each client streams {args.seconds:g} s of a 120 Hz recording (UI-PRMD "
         f"`{SESSION}` resampled) at 120 frames/s to its own live session, one frame or a batch "
@@ -426,7 +443,36 @@ def report(steps: list[Step], args: argparse.Namespace, load: str) -> str:
         ok = [s.sessions for s in steps if s.server == name and s.passed]
         lines.append(f"- {name}: largest N that passed: {max(ok) if ok else 'none'}.")
     notes = [f"- {s.server} N={s.sessions}: {n}" for s in steps for n in s.notes]
-    return "\n".join(lines + notes)
+    return "\n".join(lines + compared(steps) + notes)
+
+
+def compared(steps: list[Step]) -> list[str]:
+    """Server processor time per frame, binary against JSON, over the sizes N both measured
+    in the same configuration (the same label but for the form)."""
+    lines = []
+    for name in dict.fromkeys(s.server for s in steps if s.server.endswith(", binary")):
+        base = name.removesuffix(", binary")
+        binary, text = per_frame_ms(steps, name), per_frame_ms(steps, f"{base}, JSON")
+        both = sorted(set(binary) & set(text))
+        if not both:
+            continue
+        binary_ms = float(np.mean([binary[n] for n in both]))
+        text_ms = float(np.mean([text[n] for n in both]))
+        lines.append(
+            f"- {base}: server processor time per frame {binary_ms:.3f} ms binary against "
+            f"{text_ms:.3f} ms JSON ({binary_ms / text_ms:.2f}×, mean over N = "
+            f"{', '.join(map(str, both))})."
+        )
+    return lines
+
+
+def per_frame_ms(steps: list[Step], name: str) -> dict[int, float]:
+    """Server processor milliseconds per frame sent, by N (a second try replaces the first)."""
+    return {
+        s.sessions: 1e3 * s.server_cpu / s.sent
+        for s in steps
+        if s.server == name and s.sent and not np.isnan(s.server_cpu)
+    }
 
 
 def aligner_times() -> None:
@@ -444,6 +490,51 @@ def aligner_times() -> None:
     print(f"in-process aligner per frame: p50 {p50:.3f} ms, p95 {p95:.3f} ms")
 
 
+def reading_times(fps: float, batch: int) -> None:
+    """Processor time per frame sent at ``fps`` in messages of ``batch`` frames: reading it in
+    each form up to the aligner (JSON: orjson, then the session's check of its values; binary:
+    `analysis.live.frames.decode_frames` and the finiteness check), against aligning it (the
+    aligner thins the stream to the model's 30 frames/s). The best of 5 passes, the machine
+    being shared."""
+    import orjson
+
+    from analysis.bvh import read
+    from analysis.live import LiveAligner
+    from analysis.live.session import parse_values
+    from bench.eval_live import tutor_model
+
+    texts, binary = (recording_120(30.0, fps, batch, form).messages for form in (False, True))
+    frames = sum(len(orjson.loads(text)["frames"]) for _, text in texts)
+
+    def read_json() -> None:
+        for _, text in texts:
+            for seq, values in enumerate(orjson.loads(text)["frames"]):
+                parse_values(values, len(values), seq)
+
+    def read_binary() -> None:
+        for _, data in binary:
+            np.isfinite(decode_frames(data).values).all(axis=1)
+
+    model, rec = tutor_model(DATA, "m07"), recording_120(30.0, fps, 1)
+    skeleton = read(rec.header.encode(), max_values=0).skeleton
+
+    def align() -> None:
+        aligner = LiveAligner(model, skeleton, fps)
+        for values in rec.frames:
+            aligner.push(np.asarray(values))
+
+    for name, run in (("reading, JSON", read_json), ("reading, binary", read_binary),
+                      ("aligning", align)):  # fmt: skip
+        best = min(process_seconds(run) for _ in range(5))
+        print(f"{name}: {1e6 * best / frames:.1f} µs of processor time per frame sent")
+
+
+def process_seconds(run: Callable[[], None]) -> float:
+    started = time.process_time()
+    run()
+    return time.process_time() - started
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--servers", default="runserver,redis,uvicorn")
@@ -453,8 +544,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--redis-db", type=int, default=14)
     parser.add_argument("--batch", default="1,3", help="frames per message, e.g. 1,3")
     parser.add_argument("--processes", default="1,2", help="server processes (redis, uvicorn)")
+    parser.add_argument("--frames", default="json,binary", help="frame messages: json, binary")
     parser.add_argument("--markdown", type=Path)
     parser.add_argument("--aligner", action="store_true")
+    parser.add_argument(
+        "--reading", action="store_true",
+        help="only print the processor time to read a frame (JSON, binary) and to align it",
+    )  # fmt: skip
     parser.add_argument(
         "--proxy", action="store_true",
         help="also through docker-compose's nginx proxy in front of 2 processes (redis, uvicorn)",
@@ -462,6 +558,9 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.aligner:
         aligner_times()
+    if args.reading:
+        reading_times(args.fps, int(str(args.batch).split(",")[-1]))
+        return
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
     steps: list[Step] = []
     for kind in args.servers.split(","):
@@ -471,9 +570,12 @@ def main(argv: list[str] | None = None) -> None:
             env = server_env(folder, redis_url)
             world = setup_world(env)
             for batch, processes, proxy in configurations(kind, args):
-                rec = recording_120(args.seconds, args.fps, batch)
-                ctx = Context(env, world, rec, args.fps, folder, processes, proxy)
-                steps += grow(kind, ctx, [int(v) for v in args.counts.split(",")])
+                ctxs = [
+                    Context(env, world, recording_120(args.seconds, args.fps, batch, binary),
+                            args.fps, folder, processes, proxy)
+                    for binary in (form == "binary" for form in args.frames.split(","))
+                ]  # fmt: skip
+                steps += grow(kind, ctxs, [int(v) for v in args.counts.split(",")])
     text = report(steps, args, load)
     print(text)
     if args.markdown:
@@ -488,29 +590,39 @@ def configurations(kind: str, args: argparse.Namespace) -> list[tuple[int, int, 
     return plain + ([(b, 2, True) for b in batches] if args.proxy and kind != "runserver" else [])
 
 
-def grow(kind: str, ctx: Context, counts: list[int]) -> list[Step]:
-    """Steps of growing N until one fails (twice: the machine is shared)."""
+def grow(kind: str, ctxs: list[Context], counts: list[int]) -> list[Step]:
+    """Steps of growing N until one fails (twice: the machine is shared), for each form of
+    frame message; the forms take turns at each N, so a change in the machine's load between
+    steps falls on both."""
     steps: list[Step] = []
+    growing = list(ctxs)
     for n in counts:
-        step = measure(kind, n, ctx)
-        if not step.passed:  # the machine is shared: a failed step is tried once more
-            steps.append(step)
-            print(row(step), "(first try)", flush=True)
-            step = measure(kind, n, ctx)
-            step.notes.append("second try (the first is the row above)")
-        steps.append(step)
-        per_frame = 1e3 * step.server_cpu / max(step.sent, 1)
-        print(
-            row(step),
-            f"server p95 {step.server_p95:.1f} ms, server CPU "
-            f"{step.server_cpu:.1f} s = {per_frame:.3f} ms/frame, clients' CPU "
-            f"{step.client_cpu:.1f} s in {step.seconds:.1f} s",
-            *step.notes,
-            flush=True,
-        )
-        if not step.passed:
-            break
+        for ctx in list(growing):
+            step = measure_twice(kind, n, ctx, steps)
+            if not step.passed:
+                growing.remove(ctx)
     return steps
+
+
+def measure_twice(kind: str, n: int, ctx: Context, steps: list[Step]) -> Step:
+    """One step at N, tried again when it fails; appended to ``steps`` and printed."""
+    step = measure(kind, n, ctx)
+    if not step.passed:  # the machine is shared: a failed step is tried once more
+        steps.append(step)
+        print(row(step), "(first try)", flush=True)
+        step = measure(kind, n, ctx)
+        step.notes.append("second try (the first is the row above)")
+    steps.append(step)
+    per_frame = 1e3 * step.server_cpu / max(step.sent, 1)
+    print(
+        row(step),
+        f"server p95 {step.server_p95:.1f} ms, server CPU "
+        f"{step.server_cpu:.1f} s = {per_frame:.3f} ms/frame, clients' CPU "
+        f"{step.client_cpu:.1f} s in {step.seconds:.1f} s",
+        *step.notes,
+        flush=True,
+    )
+    return step
 
 
 if __name__ == "__main__":

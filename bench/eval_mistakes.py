@@ -5,12 +5,14 @@ built from s01's correct session alone, so every tested subject is one it never 
 and with one mistake made by editing its rotation channels:
 
 - ``reach``: every joint's rotation away from the session's first pose scaled ×0.55, so the
-  involved joints reach 55 % of their excursion; the truth of the amount is the loss in the
+  involved joints reach 55 % of their excursion (right: "bend", "raise", or "turn" for the
+  shoulder's rotation); the truth of the amount is the loss in the
   patient's own excursion: the clinical angle's median range over the unmodified session's
   repetitions minus the modified one's.
 - ``arm down``: the arm that does the exercise (collar, upper arm, forearm, hand; the side whose
-  shoulder angle ranges further in the session, `moving_arm`) kept in its first-frame pose (arm
-  exercises only).
+  shoulder flexion, abduction or elevation ranges further in the session, `moving_arm`) kept in
+  its first-frame pose (arm exercises only); right: "raise" that arm, or "turn" it in m09
+  (shoulder rotation, whose arm is already raised: left still, it did not turn).
 - ``lean``: the trunk (the spine's rotation, about the pelvis's left-right axis) leaned 20°
   forward in every frame; the truth is the change of the median trunk flexion. (These two are
   made by `tests/analysis/mistake_cases.py`.)
@@ -65,8 +67,11 @@ EXERCISES: dict[str, tuple[set[str], str]] = {
     "m05": (LEGS, ""), "m06": (LEGS, ""), "m07": (ARMS, "Right"), "m08": (ARMS, "Right"),
     "m09": (ARMS, "Right"), "m10": (ARMS, "Right"),
 }  # fmt: skip
+ARM_RANGES = ("shoulder_flexion", "shoulder_abduction", "shoulder_elevation")
+# an arm left still is told to do the exercise's own movement: raised, or turned in m09
+ARM_DOWN_DIRECTIONS = {"m09": {"turn"}}
 EXPECTED_DIRECTIONS = {
-    "reach": {"bend", "raise"}, "arm down": {"raise"}, "lean": {"straighten"},
+    "reach": {"bend", "raise", "turn"}, "arm down": {"raise"}, "lean": {"straighten"},
     "too fast": {"slow down"}, "too slow": {"speed up"},
 }  # fmt: skip
 
@@ -84,7 +89,10 @@ def first_correction(summary: AnalysisSummary) -> Any:
 
 def right_words(kind: str, correction: Any, exercise: str, side: str = "") -> bool:
     """Whether a correction names the body part and direction the mistake calls for."""
-    if correction is None or correction.direction not in EXPECTED_DIRECTIONS[kind]:
+    expected = EXPECTED_DIRECTIONS[kind]
+    if kind == "arm down":
+        expected = ARM_DOWN_DIRECTIONS.get(exercise, expected)
+    if correction is None or correction.direction not in expected:
         return False
     words = correction.part.split()
     parts, parts_side = EXERCISES[exercise]
@@ -118,7 +126,7 @@ def moving_arm(motion: Motion) -> str:
     the right arm does the shoulder extension.)"""
     series = angle_series(motion)
     reach = {side: max((float(np.nanpercentile(series[n], 95) - np.nanpercentile(series[n], 5))
-                        for n in series if n.startswith("shoulder_") and n.endswith(side.lower())),
+                        for n in series if n.startswith(ARM_RANGES) and n.endswith(side.lower())),
                        default=0.0)
              for side in ("Left", "Right")}  # fmt: skip
     return max(reach, key=lambda side: reach[side])

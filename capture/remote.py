@@ -9,6 +9,13 @@ Frames go in batches of up to ``batch`` (one message, ``{"type": "frames", ...}`
 cost is mostly per message. A batch waits at most `BATCH_WAIT` for its frames, so batching adds
 at most that to a frame's latency; by default a batch holds the frames a source sends in that
 time (3 at 120 frames/s, 1 at 30).
+
+A batch goes as a WebSocket binary message of float32 values (`analysis.live.frames`), which
+costs the server less to read than JSON, when the server's ``ready`` event says it reads that
+form (``binary_frames``); the values are then float32 (7 significant digits, what the stored
+recording holds). To a server that does not say so (an older one) a batch goes as JSON text, the
+same frames. The fallback is automatic, decided again at each (re)connection; ``stream_to``
+takes ``binary=False`` to send JSON regardless.
 """
 
 from __future__ import annotations
@@ -29,6 +36,8 @@ from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed, InvalidStatus, InvalidURI
 
 from analysis.live import Event
+from analysis.live.frames import VERSION as BINARY_VERSION
+from analysis.live.frames import encode_frames
 from capture.sources import Source, StreamInputError, print_event
 
 FloatArray = npt.NDArray[np.float64]
@@ -143,7 +152,9 @@ async def _next_batch(buffer: Buffer, seq: int, size: int) -> list[FloatArray]:
     return batch
 
 
-def _message(seq: int, batch: list[FloatArray]) -> str:
+def _message(seq: int, batch: list[FloatArray], binary: bool) -> str | bytes:
+    if binary:
+        return encode_frames(seq, np.vstack(batch))
     if len(batch) == 1:
         return json.dumps({"type": "frame", "seq": seq, "values": batch[0].tolist()})
     return json.dumps({"type": "frames", "seq": seq, "frames": [f.tolist() for f in batch]})
@@ -185,9 +196,13 @@ async def _ready(ws: ClientConnection, header: str) -> Event:
             raise StreamInputError(f"the session refused the stream: {event.get('message')}")
 
 
-async def _session(ws: ClientConnection, source: Source, buffer: Buffer, batch: int) -> Event:
-    """One connection: start (or resume), send the frames, end, wait for the summary."""
+async def _session(
+    ws: ClientConnection, source: Source, buffer: Buffer, batch: int, binary: bool
+) -> Event:
+    """One connection: start (or resume), send the frames (in binary form if the server reads
+    it and ``binary``), end, wait for the summary."""
     ready = await _ready(ws, source.header)
+    binary = binary and ready.get("binary_frames") == BINARY_VERSION
     gap = 1.0 / (SEND_SHARE * float(ready.get("max_fps") or 1000.0))
     summary: asyncio.Future[Event] = asyncio.get_running_loop().create_future()
     reader = asyncio.create_task(_receive(ws, summary, buffer.printed))
@@ -196,7 +211,7 @@ async def _session(ws: ClientConnection, source: Source, buffer: Buffer, batch: 
     try:
         while frames := await _next_batch(buffer, seq, batch):
             sent = loop.time()
-            await ws.send(_message(seq, frames))
+            await ws.send(_message(seq, frames, binary))
             seq += len(frames)
             if (wait := sent + gap * len(frames) - loop.time()) > 0:
                 await asyncio.sleep(wait)
@@ -206,9 +221,12 @@ async def _session(ws: ClientConnection, source: Source, buffer: Buffer, batch: 
         reader.cancel()
 
 
-async def stream_to(url: str, token: str, source: Source, batch: int | None = None) -> Event:
+async def stream_to(
+    url: str, token: str, source: Source, batch: int | None = None, *, binary: bool = True
+) -> Event:
     """Stream the source to the live session at ``url`` in batches of up to ``batch`` frames
-    (None: `default_batch`); the summary event."""
+    (None: `default_batch`), in binary form when the server reads it (unless not ``binary``);
+    the summary event."""
     size = default_batch(source.frame_time) if batch is None else max(1, min(MAX_BATCH, batch))
     buffer = Buffer()
     loop = asyncio.get_running_loop()
@@ -217,7 +235,7 @@ async def stream_to(url: str, token: str, source: Source, batch: int | None = No
     for attempt in range(RETRIES + 1):
         try:
             async with connect(url, additional_headers=headers, max_size=1 << 22) as ws:
-                return await _session(ws, source, buffer, size)
+                return await _session(ws, source, buffer, size, binary)
         except InvalidStatus as error:
             code = error.response.status_code
             raise StreamInputError(f"the server refused the live session ({code})") from None

@@ -116,7 +116,9 @@ def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
     limits = Limits.from_settings(settings)
     tutor = recording.exercise.tutor_motion()
     check_recording(motion, tutor.fps, len(tutor.skeleton.names), limits)
-    model_row, model = exercise_models.active_model(recording.exercise)
+    # A worker may build: the first analysis of an exercise fits its model from the tutor (the
+    # web app only ever loads one, `exercise_models.load_active`).
+    model_row, model = exercise_models.load_or_build(recording.exercise)
     history = previous_levels(recording)
 
     def on_progress(stage: str, fraction: float) -> None:
@@ -186,6 +188,8 @@ def store(run: AnalysisRun, token: str, result: AnalysisResult, model_row) -> No
     finished = False
     try:
         with transaction.atomic():
+            # Ends the run, then refreshes the patient's stored dashboard rows (attention list,
+            # progress point) from it, as `runs.fail` does for a failure.
             finished = runs.succeed(
                 str(run.pk),
                 token,

@@ -1,8 +1,17 @@
-"""Building, storing and loading the versioned model of an exercise."""
+"""Building, storing and loading the versioned model of an exercise.
+
+Loading and building are separate on purpose. `load_active` only reads the exercise's active
+stored version (once per process: `_cache`, by model row id) and raises `NoUsableModelError` when
+there is none it can use; the web server, live sessions included, only ever loads. Building
+(fitting, storing and activating a version) is an explicit call: `build_active` in this process,
+`build_version` for a version queued by the web app (`webapp.exercises.services`), and
+`load_or_build` where a worker may build the first version of an exercise itself.
+"""
 
 from __future__ import annotations
 
 import io
+from collections.abc import Callable
 from typing import Any
 
 from django.core.files.base import ContentFile
@@ -14,13 +23,33 @@ from analysis.pipeline import FittedModel, ModelVersionError, build_model, dump_
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from workers import training
 
-# Loaded models by row id: a worker analyses many recordings of the same few exercises.
+# Loaded models by row id: a worker (or a server process) uses the same few exercises over and
+# over, and a stored version never changes. Bounded, so a process serving many exercises keeps
+# only the most recently stored ones (a model is tens of MB).
 _cache: dict[str, FittedModel] = {}
+CACHE_SIZE = 16
 
 
-def fit_for_exercise(exercise: Exercise, on_progress=None) -> FittedModel:
+class NoUsableModelError(ValueError):
+    """The exercise has no active model version this code can read.
+
+    ``stale``: the id of the active version that is unreadable (written by an earlier version of
+    the analysis code), None when the exercise has no active version at all.
+    """
+
+    def __init__(self, exercise: Exercise, stale: Any = None) -> None:
+        why = "was made by an earlier version of the software" if stale else "is not built yet"
+        super().__init__(f"The model of the exercise {exercise.name!r} {why}.")
+        self.stale = stale
+
+
+def fit_for_exercise(
+    exercise: Exercise, on_progress: Callable[[str, float], None] | None = None
+) -> FittedModel:
+    # read first: a reference video's first reading also fills in suggested key poses
+    tutor = exercise.tutor_motion()
     return build_model(
-        exercise.tutor_motion(),
+        tutor,
         landmark_frames=list(exercise.tutor_landmark_frames),
         landmark_types=list(exercise.tutor_landmark_types),
         joints=list(exercise.involved_joints) or None,
@@ -45,40 +74,58 @@ def save_fitted(row: ExerciseModel, fitted: FittedModel) -> None:
     row.save()
 
 
-def build_now(exercise: Exercise, stale: Any = None) -> tuple[ExerciseModel, FittedModel]:
-    """Build and activate a new version in this process (cold start from the tutor), unless
-    another process already activated one other than the ``stale`` row's id."""
+def remember(row_id: Any, fitted: FittedModel) -> FittedModel:
+    if len(_cache) >= CACHE_SIZE:
+        _cache.pop(next(iter(_cache)))  # the oldest loaded
+    _cache[str(row_id)] = fitted
+    return fitted
+
+
+def load_row(row: ExerciseModel) -> FittedModel:
+    """The stored version, read once per process; ModelVersionError for an older format."""
+    cached = _cache.get(str(row.pk))
+    if cached is not None:
+        return cached
+    with row.artefact.open("rb") as handle:
+        return remember(row.pk, load_model(handle.read()))
+
+
+def load_active(exercise: Exercise) -> tuple[ExerciseModel, FittedModel]:
+    """The exercise's active version and its model. Never fits nor writes anything: raises
+    NoUsableModelError when the exercise has no active version or only one of an older format."""
+    exercise.refresh_from_db(fields=["active_model"])
+    if exercise.active_model_id is None:
+        raise NoUsableModelError(exercise)
+    row = ExerciseModel.objects.get(pk=exercise.active_model_id)
+    try:
+        return row, load_row(row)
+    except ModelVersionError as error:
+        raise NoUsableModelError(exercise, stale=row.pk) from error
+
+
+def build_active(exercise: Exercise, replacing: Any = None) -> tuple[ExerciseModel, FittedModel]:
+    """Fit, store and activate a new version in this process (from the tutor and any labelled
+    training recordings), unless another process meanwhile activated a version other than the
+    unusable ``replacing`` one: that version is then loaded instead of fitting a second."""
     with transaction.atomic():
         locked = Exercise.objects.select_for_update().get(pk=exercise.pk)
-        if locked.active_model_id is not None and locked.active_model_id != stale:
+        if locked.active_model_id is not None and locked.active_model_id != replacing:
             row = ExerciseModel.objects.get(pk=locked.active_model_id)
             return row, load_row(row)
         row = ExerciseModel.objects.create_next_version(locked, status=ModelStatus.RUNNING)
         fitted = fit_for_exercise(locked)
         save_fitted(row, fitted)
         Exercise.objects.filter(pk=locked.pk).update(active_model=row)
-    _cache[str(row.pk)] = fitted
-    return row, fitted
+    return row, remember(row.pk, fitted)
 
 
-def load_row(row: ExerciseModel) -> FittedModel:
-    key = str(row.pk)
-    if key not in _cache:
-        with row.artefact.open("rb") as handle:
-            _cache[key] = load_model(handle.read())
-    return _cache[key]
-
-
-def active_model(exercise: Exercise) -> tuple[ExerciseModel, Any]:
-    exercise.refresh_from_db(fields=["active_model"])
-    if exercise.active_model_id is None:
-        return build_now(exercise)
-    row = ExerciseModel.objects.get(pk=exercise.active_model_id)
+def load_or_build(exercise: Exercise) -> tuple[ExerciseModel, FittedModel]:
+    """For workers only: the active version, or a new one built now when the exercise has none
+    usable (its first analysis, or a version an earlier code wrote). The web never calls this."""
     try:
-        return row, load_row(row)
-    except ModelVersionError:
-        # written by an earlier version of the analysis code: fit it again from the same tutor
-        return build_now(exercise, stale=row.pk)
+        return load_active(exercise)
+    except NoUsableModelError as missing:
+        return build_active(exercise, replacing=missing.stale)
 
 
 def build_version(model_id: str) -> str:
@@ -90,8 +137,12 @@ def build_version(model_id: str) -> str:
         return "skipped"
     row = ExerciseModel.objects.select_related("exercise").get(pk=model_id)
 
+    # a reference video's reading shows as the first 80 % (Exercise.reading), fitting after it
+    start = 80 if row.exercise.tutor_is_video else 1
+
     def on_progress(stage: str, fraction: float) -> None:
-        ExerciseModel.objects.filter(pk=model_id).update(progress=max(1, int(99 * fraction)))
+        progress = start + int((99 - start) * fraction)
+        ExerciseModel.objects.filter(pk=model_id).update(progress=progress)
 
     try:
         fitted = fit_for_exercise(row.exercise, on_progress=on_progress)

@@ -4,6 +4,11 @@ QUEUED → RUNNING: `claim` succeeds for one worker only. A RUNNING run whose he
 the lease was abandoned (its worker died): the redelivered task may claim it again with a new token,
 up to ``ANALYSIS_MAX_ATTEMPTS`` claims in all; then the run fails with a reason instead.
 RUNNING → SUCCEEDED | FAILED: written only by the holder of the current token, so a run ends once.
+
+Every way a run ends (`succeed`, `fail`, `give_up`, and `workers.housekeeping` for runs killed
+by a time limit) then refreshes what is stored from the outcome, in the same call and in view:
+the patient's row of the dashboard's attention list and the run's progress point
+(`webapp.dashboard.precompute.refresh_after_run`), so pages read them without recomputing.
 """
 
 from __future__ import annotations
@@ -85,11 +90,16 @@ def report(run_id: str, token: str, stage: str, progress: int) -> bool:
 
 
 def succeed(run_id: str, token: str, **fields: Any) -> bool:
-    return _finish(run_id, token, status=RunStatus.SUCCEEDED, progress=100, stage="done", **fields)
+    """RUNNING → SUCCEEDED with the result ``fields``, then refresh the dashboard's stored rows."""
+    ended = _end(run_id, token, status=RunStatus.SUCCEEDED, progress=100, stage="done", **fields)
+    if ended:
+        refresh_after_run(run_id)
+    return ended
 
 
 def fail(run_id: str, token: str, user_error: str, developer_error: str) -> bool:
-    return _finish(
+    """RUNNING → FAILED with its reasons, then refresh the dashboard's stored rows."""
+    ended = _end(
         run_id,
         token,
         status=RunStatus.FAILED,
@@ -97,11 +107,12 @@ def fail(run_id: str, token: str, user_error: str, developer_error: str) -> bool
         user_error=user_error[:2000],
         developer_error=developer_error[:20000],
     )
-
-
-def _finish(run_id: str, token: str, **fields: Any) -> bool:
-    running = AnalysisRun.objects.filter(pk=run_id, lease_token=token, status=RunStatus.RUNNING)
-    finished = running.update(finished_at=timezone.now(), heartbeat_at=timezone.now(), **fields)
-    if finished == 1:  # the stored attention list follows the outcome (on write)
+    if ended:
         refresh_after_run(run_id)
-    return finished == 1
+    return ended
+
+
+def _end(run_id: str, token: str, **fields: Any) -> bool:
+    """The conditional UPDATE that ends a run held with ``token``; nothing else."""
+    running = AnalysisRun.objects.filter(pk=run_id, lease_token=token, status=RunStatus.RUNNING)
+    return running.update(finished_at=timezone.now(), heartbeat_at=timezone.now(), **fields) == 1

@@ -182,7 +182,7 @@ def _adjust_rotation(
     lo, hi, _ = _brackets(f, len(q))
     # Slerp is linear in the rotation group: the offset turns along the shortest arc, by the
     # share of the turn the timing gives each frame (uniform unless a jump limit needs otherwise).
-    field = quat.slerp(scaled[lo], scaled[hi], _timing(q, f, scaled, limit))
+    field = quat.slerp_indexed(scaled, lo, hi, _timing(q, f, scaled, limit))
     return quat.multiply(field, q)
 
 
@@ -232,11 +232,19 @@ def adjust(
     if f.size == 0 or not np.any(g > 0):
         return q.copy()
     if method == "rotation":
-        out = _adjust_rotation(q, f, t, g, max_jump_deg)
-    elif method == "euler":
-        out = _adjust_euler(q, f, t, g, order)
-    else:
+        # every joint's offset and timing are its own: the joints left as they are (γ = 0,
+        # most of a rig in most exercises) need no slerp at all, and stay bit-for-bit unchanged
+        out = q.copy()
+        moving = np.flatnonzero(g > 0)
+        t_moving = np.take(t, moving, axis=1)
+        adjusted = _adjust_rotation(
+            np.take(q, moving, axis=1), f, t_moving, g[moving], max_jump_deg
+        )
+        out[:, moving] = adjusted
+        return out
+    if method != "euler":
         raise ValueError(f"unknown adjustment method {method!r}: use 'rotation' or 'euler'")
+    out = _adjust_euler(q, f, t, g, order)
     out[:, g == 0] = q[:, g == 0]  # bit-for-bit unchanged where nothing is asked
     return out
 
@@ -315,9 +323,12 @@ def demonstration_skeletons(
     tutor_gamma: Gamma | None = None,
     tutor_root: str = "own",
     method: str = "rotation",
+    patient_world: FloatArray | None = None,
 ) -> Demonstration:
     """Patient, patient adjusted toward the tutor, tutor synchronised, and that tutor adjusted
-    toward the patient (see the module docstring). Both takes must use ``skeleton``'s joints."""
+    toward the patient (see the module docstring). Both takes must use ``skeleton``'s joints.
+    ``patient_world``: the patient's world positions (F, J, 3) when already computed (the
+    pipeline's one forward-kinematics pass of the recording)."""
     if patient.local_q.shape[1] != tutor.local_q.shape[1]:
         raise ValueError("the patient and the tutor must have the same joints")
     orders = channel_orders(skeleton)
@@ -327,8 +338,10 @@ def demonstration_skeletons(
     lm = patient.landmark_frames
     tutor_g = gamma if tutor_gamma is None else tutor_gamma
     tutor_adj = adjust(tutor_q, lm, patient.local_q[lm], tutor_g, method, order=orders)
+    if patient_world is None:
+        patient_world = forward(skeleton, patient.local_q, patient.local_t)[1]
     return Demonstration(
-        patient=forward(skeleton, patient.local_q, patient.local_t)[1],
+        patient=patient_world,
         patient_adjusted=forward(skeleton, patient_adj, patient.local_t)[1],
         tutor=forward(skeleton, tutor_q, tutor_t)[1],
         tutor_adjusted=forward(skeleton, tutor_adj, tutor_t)[1],

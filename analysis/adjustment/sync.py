@@ -139,8 +139,8 @@ def sample_rotations(local_q: FloatArray, frame_map: FloatArray) -> FloatArray:
     if q.shape[0] == 1:
         return np.repeat(q, len(frame_map), axis=0)
     lo, frac = _split(frame_map, q.shape[0])
-    frac_j = np.broadcast_to(frac[:, None], (len(frac), q.shape[1]))
-    return quat.slerp(q[lo], q[lo + 1], frac_j)
+    frac_j = np.repeat(frac[:, None], q.shape[1], axis=1)
+    return quat.slerp_indexed(q, lo, lo + 1, frac_j)
 
 
 def sample_linear(values: FloatArray, frame_map: FloatArray) -> FloatArray:

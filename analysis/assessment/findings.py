@@ -61,6 +61,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from analysis.assessment.compensations import limit_of
+from analysis.assessment.trainable import trainable
 
 MOVED_DEG = 20.0
 INVOLVED_SHARE = 0.6  # of the tutor's most-moved angle: an angle the exercise trains
@@ -199,6 +200,7 @@ def involved_angles(
     repeat the same in every repetition (`unsteady_angles`, from ``spread``: the SD of each
     range over the tutor's repetitions); ``ticked``: joints ("knee_left", "shoulder_right",
     `joint_of`) the therapist chose, which narrow the set when any of them is in it."""
+    tutor = trainable(tutor)  # not the arm's direction of raising, its roll only in m09-like
     unsteady = unsteady_angles(tutor, spread or {})
     tutor = {n: v for n, v in tutor.items() if n not in unsteady}
     top = max(tutor.values(), default=0.0)

@@ -55,6 +55,7 @@ import numpy.typing as npt
 from analysis.dtw import DTWOptions, align
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
 _OPTIONS = DTWOptions()
 PASS_SCORE = 70.0  # the one pass threshold of every exercise (0–100 scale)
 COLD_PASS_EXCESS = 1.5  # mean excess, in tutor repetition distances, at the pass boundary
@@ -76,20 +77,27 @@ TRAINED_C = 0.05  # inverse L2 strength: ~500 labelled repetitions, 2J ≈ 40 co
 def joint_deviations(segment: FloatArray, template: FloatArray) -> tuple[FloatArray, float]:
     """Per-joint mean distance (J,) along the DTW path of (n, 3J) vs (m, 3J), and its cost."""
     result = align(segment, template, _OPTIONS)
-    i, j = result.path[:, 0], result.path[:, 1]
+    return _along_path(segment, template, result.path), result.cost / len(result.path)
+
+
+def _along_path(segment: FloatArray, template: FloatArray, path: IntArray) -> FloatArray:
+    """Per-joint mean distance (J,) between the frames the DTW path pairs."""
+    i, j = path[:, 0], path[:, 1]
     diff = (segment[i] - template[j]).reshape(len(i), -1, 3)
-    return np.linalg.norm(diff, axis=-1).mean(axis=0), result.cost / len(i)
+    return np.asarray(np.linalg.norm(diff, axis=-1).mean(axis=0), dtype=np.float64)
 
 
 def _closest(segment: FloatArray, templates: Sequence[FloatArray]) -> tuple[FloatArray, int]:
-    """Deviation vector (J,) to the closest template (smallest mean path cost) and its index."""
-    best: tuple[float, FloatArray, int] | None = None
+    """Deviation vector (J,) to the closest template (smallest mean path cost) and its index;
+    the deviations are measured along the closest template's path only."""
+    best: tuple[float, IntArray, int] | None = None
     for k, template in enumerate(templates):
-        dev, cost = joint_deviations(segment, template)
+        result = align(segment, template, _OPTIONS)
+        cost = result.cost / len(result.path)
         if best is None or cost < best[0]:
-            best = (cost, dev, k)
+            best = (cost, result.path, k)
     assert best is not None
-    return best[1], best[2]
+    return _along_path(segment, templates[best[2]], best[1]), best[2]
 
 
 def deviations(segment: FloatArray, templates: Sequence[FloatArray]) -> FloatArray:

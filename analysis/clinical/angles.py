@@ -3,8 +3,9 @@
 Convention (docs/sections/clinical.md has the figures): 0 in the anatomical standing pose,
 flexion, abduction and dorsiflexion positive, their opposites (extension, adduction, plantar
 flexion) negative. Segment frames are ISB-style (X anterior, Y superior, Z right; see
-`analysis.clinical.body`). Axial rotations are not reported: Kinect-class rigs do not measure a
-bone's roll, so every angle here depends only on long axes and the pelvis and thorax frames.
+`analysis.clinical.body`). No angle reads a bone's roll about itself (Kinect-class rigs do not
+measure it): every angle here depends only on long axes and the pelvis and thorax frames; the
+upper arm's axial rotation is read from where the bent forearm points.
 
 - ``trunk_flexion`` / ``trunk_lateral_flexion``: the thorax's long axis against the vertical,
   Cardan angles in the pelvis's heading (forward lean positive; lean to the right positive).
@@ -22,6 +23,18 @@ bone's roll, so every angle here depends only on long axes and the pelvis and th
   and both read the elevation there. An arm raised overhead thus reads its elevation, not a
   share of it; an arm straight forward is flexion 90°, abduction 0°; a diagonal arm at 45° reads
   its elevation in both.
+- ``shoulder_plane_of_elevation``: the globe's first angle, the direction the arm is raised in
+  (0 out to the side, 90 straight forward, negative behind the side, over 90 across the body);
+  only where the arm is raised between `PLANE_DEFINED` degrees (hanging or straight up, the
+  direction is undefined).
+- ``shoulder_rotation``: the upper arm's axial rotation, internal (the forearm turning toward
+  the belly) positive, 0 with the forearm pointing forward from an arm hanging at the side. Read
+  from the forearm's direction about the upper arm's axis, against the thorax's forward axis
+  carried along the shortest turn from hanging to the arm's direction (so 0 is also the forearm
+  pointing forward with the arm raised to the side, and up with the arm raised forward); only
+  where the elbow is bent between `ROTATION_ELBOW_DEG`'s bounds and the arm is below
+  `PLANE_DEFINED`'s upper end (a straight forearm, or one folded back onto the upper arm, has no
+  direction about it).
 - ``knee_flexion`` / ``elbow_flexion``: the angle between the two segments' long axes (0 when
   straight; hinge joints, hyperextension is not told apart).
 - ``ankle_dorsiflexion``: the change of the angle between shank and foot from the rest pose's,
@@ -39,6 +52,7 @@ from analysis.clinical.body import (
     MAX_REST_TILT,
     SIDE_SIGN,
     SIDES,
+    Body,
     FloatArray,
     Geometry,
     geometry,
@@ -46,10 +60,12 @@ from analysis.clinical.body import (
 )
 from analysis.clinical.measured import Measured, missing_notes, within_limits
 from analysis.clinical.results import AngleRange
+from analysis.kinematics import Kinematics
 
 BILATERAL = (
     "knee_flexion", "hip_flexion", "hip_abduction", "ankle_dorsiflexion",
-    "shoulder_flexion", "shoulder_abduction", "shoulder_elevation", "elbow_flexion",
+    "shoulder_flexion", "shoulder_abduction", "shoulder_elevation",
+    "shoulder_plane_of_elevation", "shoulder_rotation", "elbow_flexion",
 )  # fmt: skip
 ANGLE_NAMES: tuple[str, ...] = (
     *(f"{name}_{side}" for name in BILATERAL for side in SIDES),
@@ -117,6 +133,55 @@ def shoulder_angles(thorax: FloatArray, arm: FloatArray, side: str) -> dict[str,
     }
 
 
+PLANE_DEFINED = (30.0, 150.0)  # elevations between which the arm's direction is defined
+# a straighter forearm, or one folded back onto the upper arm, gives no direction about it
+ROTATION_ELBOW_DEG = (30.0, 150.0)
+DEFINED_SHARE = 0.1  # defined in fewer of the frames: the recording does not measure the angle
+
+
+def _carried(v: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
+    """Vectors v (F, 3) turned by the shortest rotation taking unit a onto unit b (Rodrigues'
+    formula with c = a × b; NaN where a and b are opposite)."""
+    c = np.cross(a, b)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = 1.0 / (1.0 + np.sum(a * b, axis=-1, keepdims=True))
+    return v + np.cross(c, v) + scale * np.cross(c, np.cross(c, v))
+
+
+def _mostly_undefined(values: FloatArray) -> FloatArray:
+    """All NaN when the angle is defined in fewer than `DEFINED_SHARE` of the frames."""
+    return values if np.isfinite(values).mean() >= DEFINED_SHARE else np.full_like(values, np.nan)
+
+
+def shoulder_rotation(
+    thorax: FloatArray, arm: FloatArray, forearm: FloatArray, side: str
+) -> FloatArray:
+    """Axial rotation of the upper arm, internal positive (module docstring), degrees per
+    frame; NaN where the elbow is nearly straight or the arm near straight up."""
+    reference = _carried(thorax[..., 0], -thorax[..., 1], arm)
+    outward = np.cross(arm, reference)  # to the body's right for either arm hanging
+    turned = np.degrees(
+        np.arctan2(
+            -SIDE_SIGN[side] * np.sum(forearm * outward, -1), np.sum(forearm * reference, -1)
+        )
+    )
+    elevation, _ = shoulder_globe(thorax, arm, side)
+    elbow = _between(arm, forearm)
+    bent = (elbow >= ROTATION_ELBOW_DEG[0]) & (elbow <= ROTATION_ELBOW_DEG[1])
+    defined = bent & (elevation <= PLANE_DEFINED[1])
+    return _mostly_undefined(np.where(defined, turned, np.nan))
+
+
+def plane_of_elevation(thorax: FloatArray, arm: FloatArray, side: str) -> FloatArray:
+    """The direction the arm is raised in (module docstring), degrees per frame; NaN where
+    the arm hangs or points nearly straight up."""
+    elevation, plane = shoulder_globe(thorax, arm, side)
+    defined = (elevation >= PLANE_DEFINED[0]) & (elevation <= PLANE_DEFINED[1])
+    # across the body reads past 90 (not −180..−90): the arm sweeps on from forward
+    plane = np.where(plane < -135.0, plane + 360.0, plane)
+    return _mostly_undefined(np.where(defined, plane, np.nan))
+
+
 def _stands_on(geo: Geometry, shank: str) -> bool:
     """Whether the rest pose stands on this leg (its shank hangs within 45° of the vertical),
     so that its foot gives the ankle's zero."""
@@ -136,6 +201,17 @@ def _limb_angles(geo: Geometry, side: str) -> dict[str, FloatArray]:
     return out
 
 
+def _shoulder(thorax: FloatArray, axes: dict[str, FloatArray], side: str) -> dict[str, FloatArray]:
+    arm = axes[f"upper_arm_{side}"]
+    out = shoulder_angles(thorax, arm, side)
+    out[f"shoulder_plane_of_elevation_{side}"] = plane_of_elevation(thorax, arm, side)
+    if f"forearm_{side}" in axes:
+        out[f"shoulder_rotation_{side}"] = shoulder_rotation(
+            thorax, arm, axes[f"forearm_{side}"], side
+        )
+    return out
+
+
 def angles_of(geo: Geometry) -> dict[str, FloatArray]:
     """Every angle the geometry gives, degrees per frame, in `ANGLE_NAMES` order."""
     out: dict[str, FloatArray] = {}
@@ -144,17 +220,24 @@ def angles_of(geo: Geometry) -> dict[str, FloatArray]:
         if geo.pelvis is not None and f"thigh_{side}" in geo.axes:
             out.update(hip_angles(geo.pelvis, geo.axes[f"thigh_{side}"], side))
         if geo.thorax is not None and f"upper_arm_{side}" in geo.axes:
-            out.update(shoulder_angles(geo.thorax, geo.axes[f"upper_arm_{side}"], side))
+            out.update(_shoulder(geo.thorax, geo.axes, side))
     if geo.pelvis is not None and geo.thorax is not None:
         out.update(trunk_angles(geo.pelvis, geo.thorax, geo.up))
     return {name: out[name] for name in ANGLE_NAMES if name in out}
 
 
-def measure(motion: Motion, method: str = "orientation") -> Measured:
+def measure(
+    motion: Motion,
+    method: str = "orientation",
+    *,
+    kin: Kinematics | None = None,
+    body: Body | None = None,
+) -> Measured:
     """The angles this recording measures (`angle_series`) and, for every other angle of
     `ANGLE_NAMES`, why not (``clinical_notes``: the skeleton lacks a segment, or the readings
-    leave the body's physiological limits; `analysis.clinical.measured`)."""
-    geo = geometry(motion, method)
+    leave the body's physiological limits; `analysis.clinical.measured`); ``kin`` / ``body``:
+    the motion's kinematics and body parts when already computed (`geometry`)."""
+    geo = geometry(motion, method, kin=kin, body=body)
     raw = angles_of(geo)
     measured = within_limits(raw)
     notes = {**missing_notes(geo, ANGLE_NAMES, raw), **measured.notes}

@@ -36,9 +36,8 @@ import numpy.typing as npt
 from analysis.bvh import Motion, Skeleton
 from analysis.bvh.rigs import identify, rest_points
 from analysis.bvh.skeleton_map import SYNONYMS, normalise_name
-from analysis.kinematics import positions
+from analysis.kinematics import Kinematics, kinematics
 from analysis.kinematics import quaternions as quat
-from analysis.kinematics.forward_kinematics import global_rotations
 
 FloatArray = npt.NDArray[np.float64]
 SIDES = ("left", "right")
@@ -264,34 +263,45 @@ class Geometry:
     upright: bool = True  # whether the rest pose stands (it then gives the ankle's zero)
 
 
-def geometry(motion: Motion, method: str = "orientation") -> Geometry:
-    """Segment geometry of every frame, from segment orientations or from positions only."""
+def geometry(
+    motion: Motion,
+    method: str = "orientation",
+    *,
+    kin: Kinematics | None = None,
+    body: Body | None = None,
+) -> Geometry:
+    """Segment geometry of every frame, from segment orientations or from positions only;
+    ``kin`` / ``body``: the motion's `kinematics` and `find_body`, when already computed."""
     if method not in ("orientation", "positions"):
         raise ValueError(f"method must be 'orientation' or 'positions', not {method!r}")
     skeleton = motion.skeleton
-    body = find_body(skeleton)
+    body = find_body(skeleton) if body is None else body
+    kin = kinematics(motion) if kin is None else kin
     rest = rest_positions(skeleton)
     rest_axes = {k: unit(rest[b] - rest[a]) for k, (a, b) in body.limbs.items()}
+    pos = kin.positions
     if not body.upright:  # the rest pose is no posture: trunk frames from the body's own lines
-        pos = positions(motion)
         axes = {k: unit(pos[:, b] - pos[:, a]) for k, (a, b) in body.limbs.items()}
         pelvis, thorax = trunk_from_points(pos, body)
         return Geometry(pelvis, thorax, axes, rest_axes, take_vertical(pos, body), False)
     neutral = neutral_frame(rest, body)
     if method == "positions":
-        pos = positions(motion)
         frames = [
             None if f is None or neutral is None else _frame_from_points(pos, rest, f, neutral)
             for f in body_frames(body)
         ]
         axes = {k: unit(pos[:, b] - pos[:, a]) for k, (a, b) in body.limbs.items()}
     else:
-        rot = quat.to_matrix(global_rotations(motion))
+        # matrices of only the joints read: a rig's fingers and toes would double the work
+        rot = {j: quat.to_matrix(kin.global_q[:, j]) for j in _turning_joints(skeleton, body)}
         frames = [
             None if f is None or neutral is None else _frame_from_rotation(rot, f, neutral)
             for f in body_frames(body)
         ]
-        axes = {k: unit(_chain_vector(skeleton, rot, a, b)) for k, (a, b) in body.limbs.items()}
+        axes = {
+            k: unit(_chain_vector(skeleton, rot, a, b, motion.n_frames))
+            for k, (a, b) in body.limbs.items()
+        }
     return Geometry(frames[0], frames[1], axes, rest_axes, body.up, True)
 
 
@@ -329,15 +339,32 @@ def body_frames(body: Body) -> tuple[Frame | None, Frame | None]:
     return body.pelvis, body.thorax
 
 
-def _chain_vector(skeleton: Skeleton, rot: FloatArray, a: int, b: int) -> FloatArray:
+def _turning_joints(skeleton: Skeleton, body: Body) -> set[int]:
+    """The joints whose global rotation the orientation geometry reads: each trunk frame's
+    joints and every joint on the way up from each limb's distal end to its proximal one."""
+    out = set()
+    for frame in body_frames(body):
+        if frame is not None:
+            out |= {frame.joint, frame.lateral_joint}
+    for a, b in body.limbs.values():
+        joint = b
+        while joint != a and joint >= 0:
+            joint = int(skeleton.parents[joint])
+            out.add(joint)
+    return {j for j in out if j >= 0}
+
+
+def _chain_vector(
+    skeleton: Skeleton, rot: dict[int, FloatArray], a: int, b: int, n_frames: int
+) -> FloatArray:
     """World vector from joint ``a`` to its descendant ``b`` from the global rotations: each
     rest offset on the way turned by its parent's rotation (twist and connector joints between
     the two move the segment too)."""
-    total = np.zeros((rot.shape[0], 3))
+    total = np.zeros((n_frames, 3))
     joint = b
     while joint != a and joint >= 0:
         parent = int(skeleton.parents[joint])
-        total += rot[:, parent] @ skeleton.offsets[joint] if parent >= 0 else 0.0
+        total += rot[parent] @ skeleton.offsets[joint] if parent >= 0 else 0.0
         joint = parent
     return total
 
@@ -361,7 +388,7 @@ def _frame_from_points(
     return now @ at_rest.T @ neutral
 
 
-def _frame_from_rotation(rot: FloatArray, frame: Frame, neutral: FloatArray) -> FloatArray:
-    return make_frame(
-        rot[:, frame.joint] @ neutral[:, 1], rot[:, frame.lateral_joint] @ neutral[:, 2]
-    )
+def _frame_from_rotation(
+    rot: dict[int, FloatArray], frame: Frame, neutral: FloatArray
+) -> FloatArray:
+    return make_frame(rot[frame.joint] @ neutral[:, 1], rot[frame.lateral_joint] @ neutral[:, 2])

@@ -23,7 +23,16 @@ REGIONS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("Hips", ("hip_flexion", "hip_abduction")),
     ("Knees", ("knee_flexion",)),
     ("Ankles", ("ankle_dorsiflexion",)),
-    ("Shoulders", ("shoulder_elevation", "shoulder_flexion", "shoulder_abduction")),
+    (
+        "Shoulders",
+        (
+            "shoulder_elevation",
+            "shoulder_flexion",
+            "shoulder_abduction",
+            "shoulder_plane_of_elevation",
+            "shoulder_rotation",
+        ),
+    ),
     ("Elbows", ("elbow_flexion",)),
 )
 MOTIONS = {
@@ -36,6 +45,9 @@ MOTIONS = {
     "shoulder_flexion": "shoulder flexion",
     "shoulder_abduction": "shoulder abduction",
     "shoulder_elevation": "shoulder elevation (arm to trunk)",
+    "shoulder_plane_of_elevation": "shoulder: direction the arm is raised in (0° to the side, "
+    "90° forward)",
+    "shoulder_rotation": "shoulder rotation (inward +, outward −)",
     "elbow_flexion": "elbow flexion",
 }
 # body role of a joint (analysis.clinical.body) -> the region whose angles it moves
@@ -193,13 +205,13 @@ def symmetry_rows(angles: Mapping[str, RangeLike]) -> list[dict[str, Any]]:
 ANGLE_PARTS = {
     "knee_flexion": "knee", "hip_flexion": "hip", "hip_abduction": "leg",
     "ankle_dorsiflexion": "ankle", "shoulder_flexion": "arm", "shoulder_abduction": "arm",
-    "shoulder_elevation": "arm",
+    "shoulder_elevation": "arm", "shoulder_rotation": "arm",
     "elbow_flexion": "elbow", "trunk_flexion": "trunk", "trunk_lateral_flexion": "trunk",
 }  # fmt: skip
 ANGLE_PAST = {
     "knee_flexion": "bent", "hip_flexion": "bent", "hip_abduction": "moved out",
     "ankle_dorsiflexion": "bent", "shoulder_flexion": "rose", "shoulder_abduction": "rose",
-    "shoulder_elevation": "rose",
+    "shoulder_elevation": "rose", "shoulder_rotation": "turned",
     "elbow_flexion": "bent", "trunk_flexion": "leaned", "trunk_lateral_flexion": "bent sideways",
 }  # fmt: skip
 INSTRUCTIONS: dict[tuple[str, str], tuple[str, str]] = {
@@ -217,6 +229,11 @@ INSTRUCTIONS: dict[tuple[str, str], tuple[str, str]] = {
     ("shoulder_abduction", "more"): ("lower", "Lower your {part}: not as high out to the side"),
     ("shoulder_elevation", "less"): ("raise", "Raise your {part} higher"),
     ("shoulder_elevation", "more"): ("lower", "Lower your {part}: not as high"),
+    ("shoulder_rotation", "less"): ("turn", "Turn your {part} further, swinging the forearm wider"),
+    ("shoulder_rotation", "more"): (
+        "turn",
+        "Turn your {part} less far: a smaller swing of the forearm",
+    ),
     ("elbow_flexion", "less"): ("bend", "Bend your {part} more"),
     ("elbow_flexion", "more"): ("straighten", "Straighten your {part} more"),
     ("trunk_flexion", "less"): ("lean", "Lean your {part} further forward"),

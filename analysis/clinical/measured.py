@@ -33,9 +33,18 @@ NEEDS = {
     "shoulder_flexion": ("thorax", "upper_arm"),
     "shoulder_abduction": ("thorax", "upper_arm"),
     "shoulder_elevation": ("thorax", "upper_arm"),
+    "shoulder_plane_of_elevation": ("thorax", "upper_arm"),
+    "shoulder_rotation": ("thorax", "upper_arm", "forearm"),
     "elbow_flexion": ("upper_arm", "forearm"),
     "trunk_flexion": ("pelvis", "thorax"),
     "trunk_lateral_flexion": ("pelvis", "thorax"),
+}
+# angles defined only in some positions: why one defined in too few frames is no measurement
+UNDEFINED_WHY = {
+    "shoulder_plane_of_elevation": "the arm was not raised far enough from the side (30°) for "
+    "the direction it rises in to be seen",
+    "shoulder_rotation": "the elbow stayed nearly straight, so the upper arm's turn about itself "
+    "cannot be seen (it is read from where the bent forearm points)",
 }
 SEGMENT_WORDS = {
     "thigh": "thigh", "shank": "lower leg", "foot": "foot", "upper_arm": "upper arm",
@@ -77,12 +86,19 @@ def within_limits(series: Mapping[str, FloatArray]) -> Measured:
         tracked = np.isfinite(values)
         beyond = tracked & ((values < low) | (values > high))
         if not tracked.any():
-            notes[name] = f"{NOT_MEASURABLE}: the joint was not tracked in any frame"
+            why = UNDEFINED_WHY.get(_base(name), "the joint was not tracked in any frame")
+            notes[name] = f"{NOT_MEASURABLE}: {why}"
         elif beyond.sum() > MAX_BEYOND_SHARE * tracked.sum():
             notes[name] = beyond_note(values[beyond], low, high, beyond.sum() / tracked.sum())
         else:
             kept[name] = np.where(beyond, np.nan, values)
     return Measured(kept, notes)
+
+
+def _base(name: str) -> str:
+    """The angle's name without its side."""
+    base, _, side = name.rpartition("_")
+    return base if side in SIDES else name
 
 
 def _has(geo: Geometry, segment: str, side: str) -> bool:

@@ -43,6 +43,9 @@ NORMS: dict[str, Norm] = {
         Norm("shoulder_flexion", -60.0, 180.0),
         Norm("shoulder_abduction", 0.0, 180.0),
         Norm("shoulder_elevation", 0.0, 180.0),  # flexion's and abduction's common maximum
+        # horizontal abduction 45° behind the side, horizontal adduction 135° across
+        Norm("shoulder_plane_of_elevation", -45.0, 135.0),
+        Norm("shoulder_rotation", -90.0, 70.0),  # external 90°, internal 70°
         Norm("elbow_flexion", 0.0, 150.0),
         Norm("trunk_flexion", -25.0, 80.0),
         Norm("trunk_lateral_flexion", -35.0, 35.0),
@@ -87,6 +90,10 @@ LIMITS: dict[str, tuple[float, float]] = {
     "shoulder_flexion": (-70.0, 185.0),
     "shoulder_abduction": (-10.0, 185.0),
     "shoulder_elevation": (0.0, 185.0),
+    # a direction, read over one whole turn (angles.plane_of_elevation): the arm can point any
+    # way it is raised, so no reading of it is beyond the body; the norm flags the unusual ones
+    "shoulder_plane_of_elevation": (-135.0, 225.0),
+    "shoulder_rotation": (-120.0, 110.0),  # the normal rotations widened as for hypermobility
     "elbow_flexion": (-15.0, 160.0),
     "trunk_flexion": (-45.0, 135.0),
     "trunk_lateral_flexion": (-60.0, 60.0),

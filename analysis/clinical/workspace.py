@@ -26,8 +26,16 @@ import trimesh
 from scipy.spatial import QhullError
 
 from analysis.bvh import Motion
-from analysis.clinical.body import SIDE_SIGN, SIDES, FloatArray, find_body, geometry, unit
-from analysis.kinematics import positions
+from analysis.clinical.body import (
+    SIDE_SIGN,
+    SIDES,
+    Body,
+    FloatArray,
+    find_body,
+    geometry,
+    unit,
+)
+from analysis.kinematics import Kinematics, kinematics
 
 IntArray = npt.NDArray[np.int64]
 HEMISPHERE_SR = 2.0 * np.pi
@@ -118,14 +126,17 @@ def workspace_from_points(points: FloatArray, side: str, arm_length: float = 1.0
     return Workspace(side, total, quadrants, vertices, faces, float(arm_length))
 
 
-def hand_paths(motion: Motion) -> dict[str, tuple[FloatArray, float]]:
+def hand_paths(
+    motion: Motion, kin: Kinematics | None = None, body: Body | None = None
+) -> dict[str, tuple[FloatArray, float]]:
     """Per side: the wrist relative to the shoulder in thorax axes (Z lateral), in arm lengths,
-    (F, 3), and the arm's length in file units."""
-    body = find_body(motion.skeleton)
-    thorax = geometry(motion).thorax
+    (F, 3), and the arm's length in file units; ``kin`` / ``body`` as for `geometry`."""
+    body = find_body(motion.skeleton) if body is None else body
+    kin = kinematics(motion) if kin is None else kin
+    thorax = geometry(motion, kin=kin, body=body).thorax
     if thorax is None:
         return {}
-    pos = positions(motion)
+    pos = kin.positions
     out = {}
     for side in SIDES:
         try:
@@ -141,11 +152,17 @@ def hand_paths(motion: Motion) -> dict[str, tuple[FloatArray, float]]:
 
 
 def reachable_workspace(
-    motion: Motion, start: int | None = None, end: int | None = None
+    motion: Motion,
+    start: int | None = None,
+    end: int | None = None,
+    *,
+    kin: Kinematics | None = None,
+    body: Body | None = None,
 ) -> dict[str, Workspace]:
-    """The workspace of each hand the skeleton has, over frames ``start..end`` (inclusive)."""
+    """The workspace of each hand the skeleton has, over frames ``start..end`` (inclusive);
+    ``kin`` / ``body``: the motion's kinematics and body parts when already computed."""
     stop = None if end is None else end + 1
     return {
         side: workspace_from_points(path[start:stop], side, length)
-        for side, (path, length) in hand_paths(motion).items()
+        for side, (path, length) in hand_paths(motion, kin, body).items()
     }

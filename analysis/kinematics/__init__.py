@@ -6,8 +6,10 @@ the tutor's frame rate and computes the rotations and normalised positions every
 """
 
 from analysis.kinematics.forward_kinematics import (
+    Kinematics,
     forward,
     joint_angles,
+    kinematics,
     normalised_positions,
     positions,
     rotations,
@@ -23,9 +25,11 @@ from analysis.kinematics.resample import resample
 from analysis.kinematics.retarget import map_onto
 
 __all__ = [
+    "Kinematics",
     "flatten",
     "forward",
     "joint_angles",
+    "kinematics",
     "map_onto",
     "normalised_positions",
     "positions",

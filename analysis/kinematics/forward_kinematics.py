@@ -12,12 +12,15 @@ from __future__ import annotations
 
 import weakref
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numba
 import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh.io import Motion, Skeleton
+from analysis.kinematics import point_kernels
+from analysis.kinematics import quaternion_kernels as quat_kernels
 from analysis.kinematics import quaternions as quat
 
 FloatArray = npt.NDArray[np.float64]
@@ -80,10 +83,15 @@ _MEMO: weakref.WeakKeyDictionary[Motion, dict[str, FloatArray]] = weakref.WeakKe
 
 
 def _memoised(motion: Motion, key: str, compute: Callable[[Motion], FloatArray]) -> FloatArray:
+    return _shared(motion, key, compute).copy()
+
+
+def _shared(motion: Motion, key: str, compute: Callable[[Motion], FloatArray]) -> FloatArray:
+    """The memoised array itself, for this module's readers that never write into it."""
     cached = _MEMO.setdefault(motion, {})
     if key not in cached:
         cached[key] = compute(motion)
-    return cached[key].copy()
+    return cached[key]
 
 
 def rotations(motion: Motion) -> FloatArray:
@@ -231,6 +239,31 @@ def _positions(motion: Motion) -> FloatArray:
     return _positions_only(frames, layout, offsets, skeleton.parents)
 
 
+@dataclass(frozen=True, eq=False)
+class Kinematics:
+    """One recording's forward kinematics, computed once (`kinematics`) and handed to every
+    stage that needs it: ``local_q`` (F, J, 4) local rotations, ``local_t`` (F, J, 3)
+    translations from the parent, ``global_q`` (F, J, 4) world rotations, ``positions``
+    (F, J, 3) world positions (file units)."""
+
+    local_q: FloatArray
+    local_t: FloatArray
+    global_q: FloatArray
+    positions: FloatArray
+
+    @property
+    def heading(self) -> FloatArray:
+        """The root's heading per frame, radians: (F,) (as `heading_angles`)."""
+        return quat.twist_angle(self.local_q[:, 0], "XYZ"[UP_AXIS])
+
+
+def kinematics(motion: Motion) -> Kinematics:
+    """Every frame's rotations and positions in one forward-kinematics pass."""
+    local_q, local_t = _rotations(motion), translations(motion)
+    global_q, pos = forward(motion.skeleton, local_q, local_t)
+    return Kinematics(local_q, local_t, global_q, pos)
+
+
 def global_rotations(motion: Motion) -> FloatArray:
     """Rotations of every joint in the world frame: (F, J, 4) unit quaternions."""
     return world(motion)[0]
@@ -248,12 +281,9 @@ def segment_angles(points: FloatArray, triples: list[tuple[int, int, int]]) -> F
     """Angle in degrees at b between segments b→a and b→c for each (a, b, c): (F, len(triples))."""
     if not triples:
         return np.zeros((points.shape[0], 0))
-    a, b, c = (np.array(t) for t in zip(*triples, strict=True))
-    u, v = points[:, a] - points[:, b], points[:, c] - points[:, b]
-    cos = np.sum(u * v, axis=-1) / np.maximum(
-        np.linalg.norm(u, axis=-1) * np.linalg.norm(v, axis=-1), 1e-12
-    )
-    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    a, b, c = (np.array(t, dtype=np.int64) for t in zip(*triples, strict=True))
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    return np.degrees(point_kernels.angles_at(points, a, b, c))
 
 
 def angle_triples(skeleton: Skeleton) -> list[tuple[int, int, int]]:
@@ -271,9 +301,10 @@ def angle_triples(skeleton: Skeleton) -> list[tuple[int, int, int]]:
     return triples
 
 
-def joint_angles(motion: Motion) -> dict[str, FloatArray]:
-    """Angle (degrees, 180 = straight) between the segments meeting at each joint: {name: (F,)}."""
-    glob, pos = world(motion)
+def joint_angles(motion: Motion, kin: Kinematics | None = None) -> dict[str, FloatArray]:
+    """Angle (degrees, 180 = straight) between the segments meeting at each joint: {name: (F,)};
+    ``kin``: the motion's `kinematics` when already computed."""
+    glob, pos = world(motion) if kin is None else (kin.global_q, kin.positions)
     sk = motion.skeleton
     ends = pos[:, sk.end_site_parents] + quat.rotate(
         glob[:, sk.end_site_parents], sk.end_site_offsets
@@ -290,15 +321,16 @@ def root_relative(points: FloatArray) -> FloatArray:
 
 def heading_angles(motion: Motion) -> FloatArray:
     """The root's heading (rotation about the vertical axis) per frame, radians: (F,)."""
-    root = rotations(motion)[:, 0]
+    root = _shared(motion, "rotations", _rotations)[:, 0]
     return quat.twist_angle(root, "XYZ"[UP_AXIS])
 
 
 def heading_normalised(points: FloatArray, heading: FloatArray | float) -> FloatArray:
     """Root-relative positions turned about the vertical so the heading becomes 0: (F, J, 3)."""
     heading = np.broadcast_to(np.asarray(heading, dtype=np.float64), points.shape[:1])
-    undo = quat.from_axis_angle("XYZ"[UP_AXIS], -heading)[:, None]
-    return quat.rotate(undo, root_relative(points))
+    undo = quat.from_axis_angle("XYZ"[UP_AXIS], -heading)
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    return quat_kernels.turn_root_relative(np.ascontiguousarray(undo), points)
 
 
 def normalised_positions(motion: Motion, per_frame: bool = False) -> FloatArray:
@@ -307,7 +339,12 @@ def normalised_positions(motion: Motion, per_frame: bool = False) -> FloatArray:
     By default one heading per recording (the circular mean over frames) is removed, so turning of
     the trunk during the exercise is kept; ``per_frame`` removes each frame's own heading.
     """
-    heading = heading_angles(motion)
+    points = _shared(motion, "positions", _positions)  # read only: a new array is returned
+    return heading_facing(points, heading_angles(motion), per_frame)
+
+
+def heading_facing(points: FloatArray, heading: FloatArray, per_frame: bool = False) -> FloatArray:
+    """`normalised_positions` from world positions (F, J, 3) and the root's heading (F,)."""
     if not per_frame:
         heading = np.full_like(heading, np.angle(np.mean(np.exp(1j * heading))))
-    return heading_normalised(positions(motion), heading)
+    return heading_normalised(points, heading)

@@ -12,23 +12,34 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh.io import Motion
-from analysis.kinematics.forward_kinematics import normalised_positions
+from analysis.kinematics import point_kernels
+from analysis.kinematics.forward_kinematics import Kinematics, heading_facing, normalised_positions
 
 FloatArray = npt.NDArray[np.float64]
 
 
 def body_scale(points: FloatArray, parents: npt.NDArray[np.int64]) -> float:
     """The median over frames of the summed bone lengths: one number per recording."""
-    child = np.flatnonzero(parents >= 0)
-    bones = np.linalg.norm(points[:, child] - points[:, parents[child]], axis=-1)
+    child = np.flatnonzero(parents >= 0).astype(np.int64)
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    bones = point_kernels.distances(points, child, parents[child].astype(np.int64))
     scale = float(np.median(bones.sum(axis=1)))
     return scale if scale > 1e-9 else 1.0
 
 
-def scaled_positions(motion: Motion, joints: list[int]) -> FloatArray:
-    """Root-relative, heading-normalised positions of ``joints`` over body size: (F, len, 3)."""
-    points = normalised_positions(motion)
-    return points[:, joints] / body_scale(points, motion.skeleton.parents)
+def scaled_positions(
+    motion: Motion, joints: list[int], kin: Kinematics | None = None
+) -> FloatArray:
+    """Root-relative, heading-normalised positions of ``joints`` over body size: (F, len, 3);
+    ``kin``: the motion's `kinematics` when already computed."""
+    if kin is None:
+        points = normalised_positions(motion)
+    else:
+        points = heading_facing(kin.positions, kin.heading)
+    scale = body_scale(points, motion.skeleton.parents)
+    if list(joints) == list(range(points.shape[1])):  # every joint in file order: no gather
+        return points / scale
+    return np.take(points, joints, axis=1) / scale
 
 
 def flatten(points: FloatArray) -> FloatArray:

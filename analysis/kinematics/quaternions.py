@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from analysis.kinematics import quaternion_kernels as kernels
+
 FloatArray = npt.NDArray[np.float64]
 ArrayLike = npt.ArrayLike
 
@@ -46,17 +48,14 @@ def identity(shape: tuple[int, ...] = ()) -> FloatArray:
 def multiply(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Hamilton product a·b (apply b first, then a): (..., 4) × (..., 4) → (..., 4)."""
     a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack(
-        (
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ),
-        axis=-1,
-    )
+    shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
+    flat = kernels.multiply_rows(_rows(a, shape), _rows(b, shape))
+    return flat.reshape(*shape, 4)
+
+
+def _rows(q: FloatArray, shape: tuple[int, ...]) -> FloatArray:
+    """(..., 4) broadcast to ``shape`` and laid out as contiguous (N, 4) rows for the kernels."""
+    return np.ascontiguousarray(np.broadcast_to(q, (*shape, 4))).reshape(-1, 4)
 
 
 def conjugate(q: ArrayLike) -> FloatArray:
@@ -90,9 +89,9 @@ def make_continuous(q: ArrayLike, axis: int = 0) -> FloatArray:
 def rotate(q: ArrayLike, v: ArrayLike) -> FloatArray:
     """Rotate vectors v (..., 3) by unit quaternions q (..., 4)."""
     q, v = np.asarray(q, dtype=np.float64), np.asarray(v, dtype=np.float64)
-    w, u = q[..., :1], q[..., 1:]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    shape = np.broadcast_shapes(q.shape[:-1], v.shape[:-1])
+    vectors = np.ascontiguousarray(np.broadcast_to(v, (*shape, 3))).reshape(-1, 3)
+    return kernels.rotate_rows(_rows(q, shape), vectors).reshape(*shape, 3)
 
 
 def _axis_vector(axis: ArrayLike | str) -> FloatArray:
@@ -181,15 +180,9 @@ def matrix_to_euler(m: ArrayLike, order: str, degrees: bool = True) -> FloatArra
 
 def to_matrix(q: ArrayLike) -> FloatArray:
     """Rotation matrices (..., 3, 3) of unit quaternions (..., 4)."""
-    w, x, y, z = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
-    xx, yy, zz = x * x, y * y, z * z
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    rows = (
-        (1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)),
-        (2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)),
-        (2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)),
-    )
-    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+    q = np.asarray(q, dtype=np.float64)
+    shape = q.shape[:-1]
+    return kernels.matrix_rows(_rows(q, shape)).reshape(*shape, 3, 3)
 
 
 def from_matrix(m: ArrayLike) -> FloatArray:
@@ -222,20 +215,25 @@ def to_euler(q: ArrayLike, order: str, degrees: bool = True) -> FloatArray:
 
 
 def slerp(q0: ArrayLike, q1: ArrayLike, t: ArrayLike) -> FloatArray:
-    """Spherical linear interpolation along the shorter arc; t (...,) in [0, 1] → (..., 4)."""
+    """Spherical linear interpolation along the shorter arc; t (...,) in [0, 1] → (..., 4).
+    Nearly equal rotations (sin ω < 1e-9) are interpolated linearly, which is exact enough."""
     q0, q1 = np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64)
-    t = np.asarray(t, dtype=np.float64)[..., None]
-    dot = np.sum(q0 * q1, axis=-1, keepdims=True)
-    q1 = np.where(dot < 0.0, -q1, q1)
-    dot = np.minimum(np.abs(dot), 1.0)
-    omega = np.arccos(dot)
-    sin_omega = np.sin(omega)
-    # Nearly equal rotations: sin(omega) → 0, where normalised lerp is exact enough.
-    near = sin_omega < 1e-9
-    safe = np.where(near, 1.0, sin_omega)
-    w0 = np.where(near, 1.0 - t, np.sin((1.0 - t) * omega) / safe)
-    w1 = np.where(near, t, np.sin(t * omega) / safe)
-    return normalize(w0 * q0 + w1 * q1)
+    t = np.asarray(t, dtype=np.float64)
+    shape = np.broadcast_shapes(q0.shape[:-1], q1.shape[:-1], t.shape)
+    weights = np.ascontiguousarray(np.broadcast_to(t, shape)).reshape(-1)
+    flat = kernels.slerp_rows(_rows(q0, shape), _rows(q1, shape), weights)
+    return flat.reshape(*shape, 4)
+
+
+def slerp_indexed(q: ArrayLike, lo: ArrayLike, hi: ArrayLike, t: ArrayLike) -> FloatArray:
+    """``slerp(q[lo], q[hi], t)`` for q (L, J, 4), lo and hi (F,) indices into its first axis,
+    t (F, J): (F, J, 4), without building q[lo] and q[hi] (a resampling or an offset field)."""
+    return kernels.slerp_between(
+        np.ascontiguousarray(q, dtype=np.float64),
+        np.ascontiguousarray(lo, dtype=np.int64),
+        np.ascontiguousarray(hi, dtype=np.int64),
+        np.ascontiguousarray(t, dtype=np.float64),
+    )
 
 
 def from_rotvec(v: ArrayLike) -> FloatArray:
@@ -258,8 +256,9 @@ def to_rotvec(q: ArrayLike) -> FloatArray:
 
 def angle_between(q0: ArrayLike, q1: ArrayLike, degrees: bool = False) -> FloatArray:
     """Angle (...,) of the relative rotation from q0 to q1, in [0, π] radians (or degrees)."""
-    rel = multiply(conjugate(q0), q1)
-    angle = 2.0 * np.arctan2(np.linalg.norm(rel[..., 1:], axis=-1), np.abs(rel[..., 0]))
+    q0, q1 = np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64)
+    shape = np.broadcast_shapes(q0.shape[:-1], q1.shape[:-1])
+    angle = kernels.angle_rows(_rows(q0, shape), _rows(q1, shape)).reshape(shape)
     return np.degrees(angle) if degrees else angle
 
 

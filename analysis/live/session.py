@@ -26,7 +26,7 @@ starts before it were already received and are skipped with one ``duplicate`` er
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -91,8 +91,22 @@ def error_event(error: ProtocolError) -> Event:
 
 
 def parse_values(raw: Any, n_channels: int, seq: int) -> FloatArray:
-    """A frame's channel values (C,) from a list of numbers or a BVH frame line, or
-    ProtocolError saying what is wrong with them."""
+    """A frame's channel values (C,) from a list of numbers, a BVH frame line or a row of a
+    binary message (`analysis.live.frames`, already numbers), or ProtocolError saying what is
+    wrong with them."""
+    if isinstance(raw, np.ndarray):
+        values = raw
+        if values.shape != (n_channels,):
+            text = f"frame {seq} has {values.size} values; the skeleton has {n_channels}"
+            raise ProtocolError("value-count", text, seq)
+    else:
+        values = _listed_values(raw, n_channels, seq)
+    if not np.isfinite(values).all():
+        raise ProtocolError("not-finite", f"frame {seq} holds NaN or infinite values", seq)
+    return values
+
+
+def _listed_values(raw: Any, n_channels: int, seq: int) -> FloatArray:
     if isinstance(raw, str):
         raw = raw.split()
     if not isinstance(raw, list):
@@ -108,8 +122,6 @@ def parse_values(raw: Any, n_channels: int, seq: int) -> FloatArray:
     except (TypeError, ValueError):
         text = f"frame {seq} holds a value that is not a number"
         raise ProtocolError("not-a-number", text, seq) from None
-    if not np.isfinite(values).all():
-        raise ProtocolError("not-finite", f"frame {seq} holds NaN or infinite values", seq)
     return values
 
 
@@ -205,6 +217,14 @@ class LiveSession:
         if not isinstance(frames, list) or not 0 < len(frames) <= MAX_BATCH:
             text = f"a batch needs 'frames': a list of 1 to {MAX_BATCH} frames"
             raise ProtocolError("bad-frame", text, first)
+        return self.take_batch(first, frames)
+
+    def take_batch(self, first: int, frames: Sequence[Any] | FloatArray) -> list[Event]:
+        """Frames ``first``, ``first + 1``, … (lists of numbers, BVH lines, or the rows of a
+        binary message): a batch after the next expected frame is refused whole, frames already
+        received are skipped with one ``duplicate`` error, each other frame is kept and aligned
+        or gets its own error."""
+        self._check_started()
         if first > self.next_seq:
             text = f"a batch from frame {first} arrived; expected frame {self.next_seq}"
             raise ProtocolError("out-of-order", text, first)

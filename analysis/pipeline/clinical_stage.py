@@ -16,10 +16,11 @@ import numpy as np
 
 from analysis.bvh import Motion
 from analysis.clinical.angles import angle_ranges
-from analysis.clinical.body import FloatArray
+from analysis.clinical.body import Body, FloatArray
 from analysis.clinical.labels import involves_arms
 from analysis.clinical.results import AngleRange, WorkspaceSummary
 from analysis.clinical.workspace import Workspace, covered_patch, reachable_workspace
+from analysis.kinematics import Kinematics
 from analysis.pipeline.results import RepetitionResult
 
 MAX_HULL_VERTICES = 32  # 96 coordinates and about 170 face indices per hand
@@ -68,9 +69,14 @@ def small_hull(ws: Workspace, max_vertices: int = MAX_HULL_VERTICES) -> Workspac
 
 
 def workspace_summaries(
-    motion: Motion, involved_joints: Iterable[str]
+    motion: Motion,
+    involved_joints: Iterable[str],
+    seen: tuple[Kinematics, Body] | None = None,
 ) -> dict[str, WorkspaceSummary]:
-    """Per hand the stored workspace, for exercises that involve an arm joint only."""
+    """Per hand the stored workspace, for exercises that involve an arm joint only; ``seen``:
+    the motion's kinematics and body parts when already computed."""
     if not involves_arms(involved_joints):
         return {}
-    return {side: small_hull(ws) for side, ws in reachable_workspace(motion).items()}
+    kin, body = seen if seen is not None else (None, None)
+    hands = reachable_workspace(motion, kin=kin, body=body)
+    return {side: small_hull(ws) for side, ws in hands.items()}

@@ -23,19 +23,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh import AnalysisInputError, Motion
-from analysis.kinematics import positions, scaled_positions
+from analysis.kinematics import Kinematics
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.results import ExerciseMatch
-from analysis.retrieval import MotionRetriever, recording_features
+from analysis.pipeline.tutor_parts import RETRIEVAL_FPS, amplitudes, features_of
+from analysis.retrieval import MotionRetriever
 
 FloatArray = npt.NDArray[np.float64]
-RETRIEVAL_FPS = 15.0
 
 
 @dataclass(frozen=True)
@@ -70,11 +69,6 @@ class MatchOptions:
     margin: float = 1.75
 
 
-def amplitudes(points: FloatArray) -> FloatArray:
-    """(J,) how much each joint moves: the root of its summed positional variance."""
-    return np.sqrt(points.var(axis=0).sum(axis=-1))
-
-
 def span(signal: FloatArray) -> float:
     return float(np.percentile(signal, 95) - np.percentile(signal, 5))
 
@@ -98,7 +92,7 @@ def movement_evidence(
     """``points``: the recording's (F, J, 3) scaled positions (mirrored as scored);
     ``progress``: its progress signal; both as the pipeline prepared them."""
     parts = model.components
-    tutor = tutor_amplitudes(model)
+    tutor = model.tutor_parts.amplitudes
     mine = amplitudes(points)
     own = parts.involved_index
     profile = float(mine[1:] @ tutor[1:] / (np.linalg.norm(mine[1:]) * np.linalg.norm(tutor[1:])))
@@ -110,32 +104,17 @@ def movement_evidence(
     )
 
 
-@lru_cache(maxsize=16)  # a worker analyses many recordings of a few exercises
-def tutor_amplitudes(model: FittedModel) -> FloatArray:
-    tutor = model.tutor
-    return amplitudes(scaled_positions(tutor, list(range(len(tutor.skeleton.names)))))
-
-
-@lru_cache(maxsize=16)
-def tutor_features(model: FittedModel) -> FloatArray:
-    return features_of(model.tutor)
-
-
-def features_of(motion: Motion) -> FloatArray:
-    """A take's retrieval features ((F, 17) at 15 fps), as `Candidate.features` holds them."""
-    world = positions(motion)
-    return recording_features(world, motion.skeleton.names, motion.fps, target_fps=RETRIEVAL_FPS)
-
-
 def nearest_other(
-    motion: Motion, model: FittedModel, candidates: Sequence[Candidate]
+    motion: Motion, model: FittedModel, candidates: Sequence[Candidate], kin: Kinematics
 ) -> tuple[float | None, Candidate | None]:
     """Own tutor's DTW distance over the nearest candidate's, and that candidate (None, None
-    without candidates or when a take's body parts cannot be found)."""
-    if not candidates:
+    without candidates or when a take's body parts cannot be found); ``kin``: the motion's
+    kinematics."""
+    tutor = model.tutor_parts.features
+    if not candidates or tutor.size == 0:
         return None, None
     try:
-        mine, tutor = features_of(motion), tutor_features(model)
+        mine = features_of(motion, kin)
     except (AnalysisInputError, ValueError):
         return None, None
     known = [c for c in candidates if c.features.ndim == 2 and c.features.shape[1] == mine.shape[1]]
@@ -173,7 +152,7 @@ def decide(evidence: Evidence, context: MatchContext, options: MatchOptions) -> 
 
 
 def check_fit(  # noqa: PLR0917 (the pipeline's own figures, passed as they are)
-    motion: Motion,
+    seen: tuple[Motion, Kinematics],
     points: FloatArray,
     progress: FloatArray,
     repetitions: int,
@@ -181,10 +160,12 @@ def check_fit(  # noqa: PLR0917 (the pipeline's own figures, passed as they are)
     context: MatchContext | None = None,
     options: MatchOptions | None = None,
 ) -> ExerciseMatch:
-    """Whether the recording (``motion`` on the model's skeleton and frame rate, ``points`` and
-    ``progress`` as prepared, ``repetitions`` found) fits the model's exercise."""
+    """Whether the recording (``seen``: its motion on the model's skeleton and frame rate and
+    that motion's kinematics; ``points`` and ``progress`` as prepared, ``repetitions`` found)
+    fits the model's exercise."""
     context = context or MatchContext()
     evidence = movement_evidence(points, progress, repetitions, model)
-    nearer, nearest = nearest_other(motion, model, context.candidates)
+    motion, kin = seen
+    nearer, nearest = nearest_other(motion, model, context.candidates, kin)
     evidence = Evidence(**{**evidence.__dict__, "nearer": nearer, "nearest": nearest})
     return decide(evidence, context, options or MatchOptions())

@@ -28,10 +28,11 @@ from analysis.pipeline.model_fit import (
     TutorKeyPosesError,
     fit_components,
 )
+from analysis.pipeline.tutor_parts import TutorParts, fit_tutor_parts
 
-FORMAT_VERSION = (
-    4  # 3: one calibrated score scale (pass at 70), corrections; 4: tutor-distance scale
-)
+# 3: one calibrated score scale (pass at 70), corrections; 4: tutor-distance scale;
+# 5: the parsed grammar and the tutor's parts (`tutor_parts`) stored with the model
+FORMAT_VERSION = 5
 MAGIC = b"PHYSIO-MODEL\n"
 FloatArray = npt.NDArray[np.float64]
 Progress = Callable[[str, float], None]
@@ -43,7 +44,9 @@ class ModelVersionError(ValueError):
 
 @dataclass(frozen=True, eq=False)
 class FittedModel:
-    """A fitted exercise model (see the module docstring); ``components`` holds fitted parts."""
+    """A fitted exercise model (see the module docstring); ``components`` holds fitted parts,
+    ``rules`` the parsed ``grammar`` and ``tutor_parts`` what every analysis reads of the tutor
+    (both depend on the model alone, so they are computed once, when it is built)."""
 
     format_version: int
     code_version: str
@@ -54,6 +57,8 @@ class FittedModel:
     involved_joints: tuple[str, ...]
     grammar: str
     components: ModelComponents
+    rules: Grammar
+    tutor_parts: TutorParts
     report: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -101,7 +106,9 @@ def build_model(
         tutor, list(landmark_frames), list(landmark_types), joints, training, on_progress
     )
     text = grammar or default_grammar(list(involved), names)
-    Grammar.parse(text)  # a bad grammar fails the build, not every analysis
+    rules = Grammar.parse(text)  # a bad grammar fails the build, not every analysis
+    landmarks = (list(landmark_frames), list(landmark_types))
+    tutor_parts = fit_tutor_parts(tutor, landmarks, components, involved)
     return FittedModel(
         format_version=FORMAT_VERSION,
         code_version=code_version,
@@ -112,6 +119,8 @@ def build_model(
         involved_joints=tuple(involved),
         grammar=text,
         components=components,
+        rules=rules,
+        tutor_parts=tutor_parts,
         report=report,
     )
 

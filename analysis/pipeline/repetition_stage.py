@@ -18,12 +18,10 @@ from analysis.pipeline.gestures import (
     align_gesture,
     gesture_score,
     guidance,
-    reference_excursion,
     repetition_pace,
     usual_pace,
 )
 from analysis.pipeline.model import FittedModel
-from analysis.pipeline.model_parts import rotations_at
 from analysis.pipeline.prepare import Prepared
 from analysis.pipeline.results import Guidance, KeyPose
 
@@ -80,13 +78,10 @@ def tutor_repetition(start: int, k: int, sync: Synchronised, model: FittedModel)
 
 def pace_reference(model: FittedModel) -> tuple[list[int], list[int], FloatArray, float]:
     """The involved joints, their mirror images' joints, the tutor's excursion of both
-    (`reference_excursion`) and the tutor's repetition length (median, model frames)."""
-    papers, parts = model.components.papers, model.components
-    index = list(papers.joint_index)
-    mirror = [parts.mirror[j] for j in index]
-    reps, step = parts.tutor_reps, parts.scoring_step
-    reference = reference_excursion(papers.tutor_q, rotations_at(model.tutor, mirror), reps, step)
-    return index, mirror, reference, float(np.median([b - a + 1 for a, b in reps])) if reps else 1.0
+    (`reference_excursion`) and the tutor's repetition length (median, model frames), as
+    computed when the model was built (`analysis.pipeline.tutor_parts.PaceReference`)."""
+    pace = model.tutor_parts.pace
+    return pace.index, pace.mirror, pace.excursion, pace.tutor_frames
 
 
 def session_pace(

@@ -6,6 +6,14 @@ returns a frozen `AnalysisResult` whose ``to_json()`` holds the fields of ``anal
 (CONTRACTS.md) and more, and whose ``arrays()`` holds the per-frame data for playback. Progress is
 reported as ``on_progress(stage, fraction)``. Bad input raises a subclass of
 `analysis.errors.AnalysisInputError` with a message a therapist can read.
+
+It runs in four phases, each returning a frozen result: `find_repetitions` (`Found`: stages
+prepare … match), `score` (`Scored`: synchronisation … performance_level, only for a recording
+that shows the exercise), `measure_recording` (`Measures`: adjustment, clinical_angles) and
+`explain` (`Explained`: feedback, workspace). The recording's forward kinematics and body parts
+are computed once, in preparation, and handed along in `Prepared`; what depends on the model
+alone (the parsed grammar, the tutor's clinical reference, playback take and pace reference)
+was computed when the model was built (`analysis.pipeline.tutor_parts`).
 """
 
 from __future__ import annotations
@@ -21,8 +29,8 @@ import numpy.typing as npt
 
 from analysis.bvh import Motion
 from analysis.bvh.plausibility import DEFAULT_LIMITS, Limits
-from analysis.clinical import angle_ranges, measure
-from analysis.feedback import Comment
+from analysis.clinical import Measured, angle_ranges, measure
+from analysis.feedback import Comment, LandmarkAssessment
 from analysis.feedback.advice import Advice
 from analysis.pipeline.advice_stage import plain_errors_fail
 from analysis.pipeline.clinical_stage import repetition_angles, workspace_summaries
@@ -32,7 +40,15 @@ from analysis.pipeline.match import MatchContext, check_fit
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import Prepared, mirrored, prepare, progress_signal
 from analysis.pipeline.repetition_stage import gesture_results, synchronise
-from analysis.pipeline.results import AnalysisSummary, ExerciseMatch, KeyPose, RepetitionResult
+from analysis.pipeline.results import (
+    AnalysisSummary,
+    AngleRange,
+    ExerciseMatch,
+    KeyPose,
+    PeriodicSummary,
+    RepetitionResult,
+    WorkspaceSummary,
+)
 from analysis.pipeline.stage_order import ORDER, Stage, StageOrder
 from analysis.pipeline.stages import (
     assess_landmarks,
@@ -45,6 +61,7 @@ from analysis.pipeline.stages import (
     tempo_median,
 )
 from analysis.pipeline.still_advice import still_advice
+from analysis.pipeline.tutor_parts import compensations
 
 Progress = Callable[[str, float], None]
 FloatArray = npt.NDArray[np.float64]
@@ -90,6 +107,54 @@ class StageTimer:
 STAGES = tuple((stage.key, stage.label) for stage in ORDER)
 
 
+@dataclass(frozen=True, eq=False)
+class Found:
+    """Phase 1, finding the repetitions (stages prepare … match): the recording as prepared,
+    its progress signal, whether it was done with the other side, the key poses and
+    repetitions found, the key poses shown, and whether it shows the exercise at all."""
+
+    prepared: Prepared
+    progress: FloatArray
+    used_mirror: bool
+    cut: KeyPoseRepetitions
+    periodic: PeriodicSummary
+    landmarks: tuple[KeyPose, ...]
+    fit: ExerciseMatch
+
+
+@dataclass(frozen=True, eq=False)
+class Scored:
+    """Phase 2, scoring (synchronisation … performance_level): the per-joint assessment of
+    every key pose, the repetitions with their scores, and the performance level γ."""
+
+    assessment: tuple[LandmarkAssessment, ...] = ()
+    repetitions: tuple[RepetitionResult, ...] = ()
+    gamma: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
+class Measures:
+    """Phase 3, measuring (adjustment, clinical_angles): the playback arrays, the clinical
+    angles (series and ranges, and why an angle is missing), the compensations, and the
+    repetitions with their angle ranges (a plain error failing its repetition)."""
+
+    playback: dict[str, npt.NDArray[Any]]
+    measured: Measured
+    angles: dict[str, AngleRange]
+    compensations: dict[str, FloatArray]
+    repetitions: tuple[RepetitionResult, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class Explained:
+    """Phase 4, explaining (feedback, workspace): the advice, the feedback list and the reach
+    of each hand."""
+
+    advice: Advice
+    feedback: tuple[Comment, ...]
+    workspace: dict[str, WorkspaceSummary]
+
+
 def analyse(
     motion: Motion,
     model: FittedModel,
@@ -107,6 +172,24 @@ def analyse(
     usual tempo and reach from an earlier session (`repetition_stage.session_pace`), which
     paper 001's guidance judges this one against as well as against the tutor."""
     timer = StageTimer(on_progress)
+    found = find_repetitions(motion, model, limits, match, timer)
+    scored = score(found, model, (history, own_pace), timer) if found.fit.fits else Scored()
+    measures = measure_recording(found, scored, model, timer)
+    explained = explain(found, measures, scored, model, timer)
+    if on_progress is not None:
+        on_progress("done", 1.0)
+    summary = _summary(found, scored, (measures, explained), model, timer)
+    return AnalysisResult(summary, measures.playback)
+
+
+def find_repetitions(
+    motion: Motion,
+    model: FittedModel,
+    limits: Limits,
+    match: MatchContext | None,
+    timer: StageTimer,
+) -> Found:
+    """Phase 1: prepare the recording, find its key poses and repetitions, check it fits."""
     parts = model.components
     papers = parts.papers
     with timer("prepare"):
@@ -124,95 +207,107 @@ def analyse(
     with timer("match"):
         points = mirrored(prepared.points, parts.mirror) if used_mirror else prepared.points
         found = int(cut.segments.starts.size)
-        fit = check_fit(prepared.motion, points, progress, found, model, match)
-    if not fit.fits:
-        return _unfit(prepared, model, (fit, cut, used_mirror), timer, on_progress)
+        seen = (prepared.motion, prepared.kinematics)
+        fit = check_fit(seen, points, progress, found, model, match)
+    return Found(prepared, progress, used_mirror, cut, periodic, landmarks, fit)
+
+
+def score(
+    found: Found,
+    model: FittedModel,
+    before: tuple[Mapping[str, float] | None, Pace | None],
+    timer: StageTimer,
+) -> Scored:
+    """Phase 2 (a recording that fits only): align each repetition with the tutor, assess
+    every key pose, score the repetitions and update the performance level; ``before``: the
+    patient's levels and own pace from earlier sessions."""
+    history, own_pace = before
+    prepared, segments = found.prepared, found.cut.segments
     with timer("synchronisation"):
-        sync = synchronise(landmarks, model)
+        sync = synchronise(found.landmarks, model)
     with timer("alignment"):
         # scored as the tutor's side when the patient used the other one
         scored = prepared
-        if used_mirror:
-            scored = replace(prepared, points=mirrored(prepared.points, parts.mirror))
-        gestures = gesture_results(prepared, cut.segments, progress, sync, model, own_pace)
+        if found.used_mirror:
+            scored = replace(prepared, points=mirrored(prepared.points, model.components.mirror))
+        gestures = gesture_results(prepared, segments, found.progress, sync, model, own_pace)
     with timer("assessment"):  # before the scores (see stage_order)
-        assessment = assess_landmarks(prepared, landmarks, model)
+        assessment = assess_landmarks(prepared, found.landmarks, model)
     with timer("scores"):
         repetitions = repetition_results(
-            scored, cut.segments, progress, model, gestures, assessment
+            scored, segments, found.progress, model, gestures, assessment
         )
     with timer("performance_level"):
         gamma = performance_level(assessment, history)
+    return Scored(assessment, repetitions, gamma)
+
+
+def measure_recording(
+    found: Found, scored: Scored, model: FittedModel, timer: StageTimer
+) -> Measures:
+    """Phase 3: the playback skeletons (the tutor at its own pace for a recording that does
+    not fit), the clinical angles and compensations, each repetition's angle ranges."""
+    prepared = found.prepared
     with timer("adjustment"):
-        playback = playback_arrays(prepared, landmarks, model, gamma)
+        shown = found.landmarks if found.fit.fits else ()
+        playback = playback_arrays(prepared, shown, model, scored.gamma)
     with timer("clinical_angles"):  # only what the recording measures; notes say why not
-        measured = measure(prepared.motion)
-        series, angles = measured.series, angle_ranges(measured.series)
-        repetitions = repetition_angles(series, repetitions)
-        # a plain error (a main angle far short, a trunk lean held) fails its repetition
-        repetitions = plain_errors_fail(repetitions, model, used_mirror, prepared.motion)
-    with timer("feedback"):  # after the angles (see stage_order)
-        advice, feedback = feedback_items(
-            repetitions, assessment, model, used_mirror, prepared.motion
-        )
-    with timer("workspace"):
-        workspace = workspace_summaries(prepared.motion, model.involved_joints)
-    if on_progress is not None:
-        on_progress("done", 1.0)
-    summary = AnalysisSummary(
-        frames=prepared.n_frames,
-        fps=round(prepared.motion.fps, 6),
-        landmarks=landmarks,
-        repetitions=repetitions,
-        score=_recording_score(repetitions),
-        assessment=assessment,
-        feedback=feedback,
-        advice=advice,
-        gamma=gamma,
-        mirrored=used_mirror,
-        range_of_motion=joint_ranges(prepared, model),
-        tempo=tempo_median(repetitions),
-        timings_ms=timer.timings,
-        segmentation=cut.segmentation,
-        periodic=periodic,
-        pass_threshold=papers.threshold.value,
-        clinical_angles=angles,
-        clinical_notes=measured.notes,
-        workspace=workspace,
-    )
-    return AnalysisResult(summary, playback)
-
-
-def _unfit(
-    prepared: Prepared,
-    model: FittedModel,
-    found: tuple[ExerciseMatch, KeyPoseRepetitions, bool],
-    timer: StageTimer,
-    on_progress: Progress | None,
-) -> AnalysisResult:
-    """A recording that does not show the exercise: no repetition, no score, no level; its
-    joint angles, reach and playback (the tutor at its own pace) are still measured."""
-    fit, cut, used_mirror = found
-    with timer("adjustment"):
-        playback = playback_arrays(prepared, (), model, {})
-    with timer("clinical_angles"):
-        measured = measure(prepared.motion)
+        kin, body = prepared.kinematics, prepared.body
+        measured = measure(prepared.motion, kin=kin, body=body)
         angles = angle_ranges(measured.series)
-    with timer("feedback"):  # the exercise's own parts left (nearly) still: say which
-        advice = still_advice(measured.series, model) if fit.looks_like is None else Advice()
+        series = compensations(kin.positions, body) if found.fit.fits else {}
+        repetitions = repetition_angles(measured.series, scored.repetitions)
+        # a plain error (a main angle far short, a trunk lean held) fails its repetition
+        repetitions = plain_errors_fail(repetitions, model, found.used_mirror, series)
+    return Measures(playback, measured, angles, series, repetitions)
+
+
+def explain(
+    found: Found, measures: Measures, scored: Scored, model: FittedModel, timer: StageTimer
+) -> Explained:
+    """Phase 4: the feedback in plain words (for a recording that does not fit, which of the
+    exercise's own parts were left still) and the reach of each hand."""
+    prepared = found.prepared
+    with timer("feedback"):  # after the angles (see stage_order)
+        if found.fit.fits:
+            advice, feedback = feedback_items(
+                measures.repetitions, scored.assessment, model, found.used_mirror,
+                measures.compensations,
+            )  # fmt: skip
+        else:  # the exercise's own parts left (nearly) still: say which
+            still = found.fit.looks_like is None
+            advice = still_advice(measures.measured.series, model) if still else Advice()
+            feedback = tuple(Comment(c.frame, c.text) for c in advice.corrections)
     with timer("workspace"):
-        workspace = workspace_summaries(prepared.motion, model.involved_joints)
-    if on_progress is not None:
-        on_progress("done", 1.0)
-    summary = AnalysisSummary(
-        frames=prepared.n_frames, fps=round(prepared.motion.fps, 6), landmarks=(),
-        repetitions=(), score=None, mirrored=used_mirror, advice=advice,
-        feedback=tuple(Comment(c.frame, c.text) for c in advice.corrections),
-        range_of_motion=joint_ranges(prepared, model), timings_ms=timer.timings,
-        segmentation=cut.segmentation, pass_threshold=model.components.papers.threshold.value,
-        clinical_angles=angles, clinical_notes=measured.notes, workspace=workspace, match=fit,
+        seen = (prepared.kinematics, prepared.body)
+        workspace = workspace_summaries(prepared.motion, model.involved_joints, seen)
+    return Explained(advice, feedback, workspace)
+
+
+def _summary(
+    found: Found,
+    scored: Scored,
+    told: tuple[Measures, Explained],
+    model: FittedModel,
+    timer: StageTimer,
+) -> AnalysisSummary:
+    """The stored summary of the four phases (no repetition, score or level when unfit)."""
+    measures, explained = told
+    prepared, fits = found.prepared, found.fit.fits
+    repetitions = measures.repetitions
+    return AnalysisSummary(
+        frames=prepared.n_frames, fps=round(prepared.motion.fps, 6),
+        landmarks=found.landmarks if fits else (), repetitions=repetitions,
+        score=_recording_score(repetitions) if fits else None,
+        assessment=scored.assessment, feedback=explained.feedback, advice=explained.advice,
+        gamma=scored.gamma, mirrored=found.used_mirror,
+        range_of_motion=joint_ranges(prepared, model),
+        tempo=tempo_median(repetitions) if fits else None, timings_ms=timer.timings,
+        segmentation=found.cut.segmentation, periodic=found.periodic if fits else PeriodicSummary(),
+        pass_threshold=model.components.papers.threshold.value,
+        clinical_angles=measures.angles, clinical_notes=measures.measured.notes,
+        workspace=explained.workspace, match=found.fit,
     )  # fmt: skip
-    return AnalysisResult(summary, playback)
 
 
 def _shown_landmarks(

@@ -16,18 +16,17 @@ from analysis.assessment.findings import findings, swapped_side, tutor_ranges, t
 from analysis.assessment.joints import N_LEVELS
 from analysis.assessment.limbs import arm_first
 from analysis.assessment.scoring import MISSED_CAP, missed_key_pose
-from analysis.bvh import Motion
 from analysis.clinical import angle_ranges, angle_series
 from analysis.clinical.labels import angle_part
 from analysis.feedback import Comment, Grammar, LandmarkAssessment
 from analysis.feedback.advice import MAX_CORRECTIONS, Advice, advise
 from analysis.feedback.text import correction_rules
-from analysis.kinematics import flatten, range_of_motion, relative_to_start, translations
+from analysis.kinematics import flatten, range_of_motion, relative_to_start
 from analysis.kinematics import quaternions as quat
 from analysis.landmarks import Segments
 from analysis.pipeline.advice_stage import recording_passed, repetition_measures, tutor_reference
 from analysis.pipeline.model import FittedModel
-from analysis.pipeline.prepare import Prepared
+from analysis.pipeline.prepare import Prepared, in_model_order
 from analysis.pipeline.repetition_stage import GestureResult
 from analysis.pipeline.results import KeyPose, RepetitionResult
 
@@ -71,7 +70,7 @@ def repetition_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds th
     key pose the per-joint assessment finds clearly missed scores below the pass threshold."""
     parts = model.components
     threshold = parts.papers.threshold.value
-    movement = flatten(prepared.points[:, parts.scored_index])
+    movement = flatten(np.take(prepared.points, parts.scored_index, axis=1))
     tutor_frames = float(np.median([len(t) for t in parts.templates]))
     step = parts.scoring_step
     out = []
@@ -144,14 +143,15 @@ def feedback_items(
     assessment: tuple[LandmarkAssessment, ...],
     model: FittedModel,
     mirrored: bool,
-    motion: Motion | None = None,
+    series: Mapping[str, FloatArray] | None = None,
 ) -> tuple[Advice, tuple[Comment, ...]]:
     """The corrections and what went well (`analysis.feedback.advice`), said by the exercise's
     grammar; and the feedback list: the corrections at the frame where each first happened,
-    then, for an older grammar written per key pose, its comments with repeats left out."""
-    grammar = Grammar.parse(model.grammar)
+    then, for an older grammar written per key pose, its comments with repeats left out;
+    ``series``: the recording's compensations (`analysis.pipeline.tutor_parts.compensations`)."""
+    grammar = model.rules
     reference = tutor_reference(model)
-    measures = repetition_measures(repetitions, motion)
+    measures = repetition_measures(repetitions, series)
     passed = recording_passed(repetitions, model)
     found = arm_first(findings(measures, reference, mirrored, passed=passed))
     # the default sentences say what a grammar written before a kind of finding has no rule for
@@ -189,12 +189,12 @@ def playback_arrays(
     skeleton = model.tutor.skeleton
     frames = np.array([m.frame for m in landmarks], dtype=np.int64)
     types = np.array([m.type for m in landmarks], dtype=np.int64)
-    patient_t = translations(prepared.motion)[:, prepared.joint_index]
-    patient = Performance(prepared.local_q, patient_t, frames, types)
-    tutor = Performance.from_motion(model.tutor, model.landmark_frames, model.landmark_types)
+    kin, index = prepared.kinematics, prepared.joint_index
+    patient = Performance(prepared.local_q, in_model_order(kin.local_t, index), frames, types)
     demo = demonstration_skeletons(
-        skeleton, patient, tutor, model.components.mean_poses,
+        skeleton, patient, model.tutor_parts.take, model.components.mean_poses,
         gamma_vector(dict(gamma), skeleton.names), tutor_root="patient",
+        patient_world=in_model_order(kin.positions, index),
     )  # fmt: skip
     return {
         "patient_positions": demo.patient.astype(np.float32),

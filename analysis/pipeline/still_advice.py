@@ -56,7 +56,7 @@ def still_findings(series: Mapping[str, FloatArray], model: FittedModel) -> list
 def still_advice(series: Mapping[str, FloatArray], model: FittedModel) -> Advice:
     """The corrections of `still_findings`, said by the exercise's grammar (the default
     sentences where it has no rule), the whole recording in place of the repetitions."""
-    speakers = (Grammar.parse(model.grammar), Grammar(tuple(correction_rules())))
+    speakers = (model.rules, Grammar(tuple(correction_rules())))
     part = main_part(tutor_reference(model).ranges)
     corrections = []
     for finding in still_findings(series, model)[:MAX_CORRECTIONS]:

@@ -6,7 +6,9 @@ arm, forearm, hand, upper leg, lower leg and foot, named as `analysis.bvh.rigs` 
 
 - Points (canonical names such as ``left_knee``) come in metres, any right-handed axes; a point
   missing in some frames is bridged by linear interpolation (reported); the spine, chest and neck
-  are estimated from their neighbours when a source has no such point.
+  are estimated from their neighbours when a source has no such point: the chest is a keypoint
+  set's neck, or lies between the shoulders under the head; a missing pelvis lies behind the hip
+  joints (`pelvis_behind_hips`), where rigs put the spine's base.
 - Bone lengths are the median distances over the take. The rest pose is a person standing
   (Y up, facing +Z, left +X, arms and legs hanging, feet forward), so a standing frame gives
   rotations near zero at the hips, knees and shoulders.
@@ -129,17 +131,55 @@ def complete(points: dict[str, FloatArray]) -> tuple[str, ...]:
             "The file has no usable positions for the " + ", ".join(missing) + "."
         )
     estimated = []
-    mid = {
-        "pelvis": ("left_hip", "right_hip", 0.5),
-        "chest": ("left_shoulder", "right_shoulder", 0.5),
-        "spine": ("pelvis", "chest", 0.5),
-        "neck": ("chest", "head", 0.35),
-    }
+    if "chest" not in points:
+        # A keypoint set's neck (BODY_25, HALPE) is the base of the neck between the shoulders:
+        # where a rig's thoracic spine ends. Without it, between the shoulders under the head.
+        if "neck" in points:
+            points["chest"] = points.pop("neck")
+        else:
+            points["chest"] = chest_under_head(points)
+        estimated.append("chest")
+    if "pelvis" not in points:
+        points["pelvis"] = pelvis_behind_hips(points)
+        estimated.append("pelvis")
+    mid = {"spine": ("pelvis", "chest", 0.5), "neck": ("chest", "head", 0.35)}
     for name, (a, b, share) in mid.items():
         if name not in points:
             points[name] = points[a] + share * (points[b] - points[a])
             estimated.append(name)
     return tuple(estimated)
+
+
+def chest_under_head(points: Mapping[str, FloatArray]) -> FloatArray:
+    """The thoracic spine's top of a source without one: between the shoulders, moved along the
+    shoulder line to where the head sits over it over the take (the median), since the spine
+    runs under the head while the shoulders may stand unevenly about it (one further out)."""
+    left, right = points["left_shoulder"], points["right_shoulder"]
+    middle = (left + right) / 2
+    lateral = _unit(left - right)
+    aside = float(np.median(np.sum((points["head"] - middle) * lateral, axis=-1)))
+    return middle + aside * lateral
+
+
+# The spine's base (the lumbosacral joint, a rig's hips joint) lies behind the hip joint centres:
+# 0.2 to 0.3 of the distance between them in the UI-PRMD and CMU rigs (medians over a take); the
+# trunk line from the middle of the hip joints instead leans forward by several degrees. 0.15
+# agreed best with the BVH over the UI-PRMD round trip (`make capture-check`: 0.1 to 0.25 tried),
+# the trunk bending forward over the hips moving "behind" with it.
+PELVIS_BACK = 0.15
+
+
+def pelvis_behind_hips(points: Mapping[str, FloatArray]) -> FloatArray:
+    """The spine's base of a source without one: ``PELVIS_BACK`` hip widths behind the middle of
+    the hip joints, "behind" taken from the hip line and the trunk's line up to the chest."""
+    left, right = points["left_hip"], points["right_hip"]
+    middle = (left + right) / 2
+    lateral = _unit(left - right)
+    up = points["chest"] - middle
+    up = _unit(up - np.sum(up * lateral, axis=-1, keepdims=True) * lateral)
+    forward = np.cross(lateral, up)  # left × up: the body's front (LEFT × UP = FORWARD)
+    width = np.linalg.norm(left - right, axis=-1, keepdims=True)
+    return middle - PELVIS_BACK * width * forward
 
 
 def _unit(v: FloatArray) -> FloatArray:

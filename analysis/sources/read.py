@@ -110,7 +110,7 @@ def _gap_notes(solved: Solved) -> list[str]:
     if solved.estimated:
         shown = ", ".join(PLAIN.get(e, e.replace("_", " ")) for e in solved.estimated)
         notes.append(
-            f"The file has no point for the {shown}; each was placed between its neighbours."
+            f"The file has no point for the {shown}; each was estimated from the points around it."
         )
     return notes
 

@@ -268,7 +268,12 @@ def test_bandai_style_rig_reads_the_angles_of_the_original(name):
     before = measure(original)
     after = measure(same)
     shared = set(before.series) & set(after.series)
-    assert shared >= set(ANGLE_NAMES) - {"ankle_dorsiflexion_left", "ankle_dorsiflexion_right"}
+    assert shared >= {
+        n
+        for n in ANGLE_NAMES
+        if not n.startswith(("ankle", "shoulder_rotation")) and not n.startswith("shoulder_plane")
+    }  # defined where the arm is up
+    assert set(before.series) - {"ankle_dorsiflexion_left", "ankle_dorsiflexion_right"} == shared
     worst = {
         n: float(np.nanmax(np.abs(before.series[n] - after.series[n]))) for n in sorted(shared)
     }

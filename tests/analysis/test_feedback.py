@@ -498,9 +498,10 @@ def test_default_grammar_for_ui_prmd_skeleton() -> None:
     joints = read(UI_PRMD_REP).skeleton.names
     text = default_grammar(joints, ["start", "end of range"], levels=(3, 4))
     parsed = Grammar.parse(text)
-    # less, more, extra, good per clinical angle (18); a trunk lean held forward or back (2 × 2);
-    # the compensations (trunk rotation, each shoulder's hike, each knee's valgus); the tempo
-    corrections = 4 * 18 + 2 * 2 + 5 + 2
+    # less, more, extra, good per clinical angle corrected (20: not the direction the arm is
+    # raised in); a trunk lean held forward or back (2 × 2); the compensations (trunk rotation,
+    # each shoulder's hike, each knee's valgus); the tempo
+    corrections = 4 * 20 + 2 * 2 + 5 + 2
     assert len(parsed.rules) == corrections + 2 * len(joints) * 3
     assert parsed.problems(joints, types={1, 2}) == ()
     assert Grammar.parse(default_grammar(joints, ["start"])).has_findings

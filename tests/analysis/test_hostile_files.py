@@ -3,7 +3,7 @@ frame times, frame counts, nesting depth, NaN and huge values, channels that do 
 truncated and binary files, other rigs, broken structure), each in its own process under a
 3 GiB address-space limit and 60 s (`tests.hostile_run`): every answer is a result (exit 0, one
 JSON object) or exit 2 with a one-line reason; none is a traceback. ``HOSTILE_COUNT`` changes
-the count: the suite runs a fixed-seed 2,000, `make hostile` 10,000 and `make fuzz` 100,000."""
+the count: the suite runs a fixed-seed 1,000, `make hostile` 10,000 and `make fuzz` 100,000."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-COUNT = int(os.environ.get("HOSTILE_COUNT", "2000"))
+COUNT = int(os.environ.get("HOSTILE_COUNT", "1000"))
 
 
 def test_every_hostile_file_gets_a_result_or_a_one_line_reason():

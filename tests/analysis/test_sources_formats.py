@@ -13,7 +13,7 @@ import pytest
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics.forward_kinematics import positions, rotations
 from analysis.sources import CaptureFileError, motion_from_landmarks, read_recording
-from analysis.sources.ik import NAMES, UNITS_PER_METRE
+from analysis.sources.ik import NAMES, PELVIS_BACK, UNITS_PER_METRE, complete
 from analysis.sources.names import MEDIAPIPE
 from tests.capture_samples import LAYOUTS, kinect_long_csv, write_layout
 
@@ -180,3 +180,43 @@ def test_landmarks_with_frames_without_a_person_are_bridged():
 def test_an_unknown_kind_of_file_is_refused_in_words():
     with pytest.raises(CaptureFileError, match="cannot be read; upload"):
         read_recording("take.xyz", b"1,2,3\n")
+
+
+def trunk_estimates(points: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The points after `complete` fills in the trunk a source lacks."""
+    filled = dict(points)
+    complete(filled)
+    return filled
+
+
+def test_a_missing_pelvis_is_placed_behind_the_hip_joints():
+    """Facing +z: the spine's base lies ``PELVIS_BACK`` hip widths behind the hip joints, not
+    between them (the trunk line would lean forward by several degrees)."""
+    points = standing()
+    del points["pelvis"]
+    pelvis = trunk_estimates(points)["pelvis"]
+    hips = (points["left_hip"] + points["right_hip"]) / 2
+    width = np.linalg.norm(points["left_hip"] - points["right_hip"], axis=1)
+    assert np.allclose(hips[:, 2] - pelvis[:, 2], PELVIS_BACK * width, atol=0.005)
+    assert np.allclose(pelvis[:, :2], hips[:, :2], atol=0.005)
+
+
+def test_a_keypoint_sets_neck_is_the_top_of_the_chest():
+    points = standing()
+    del points["chest"]
+    filled = trunk_estimates(points)
+    assert np.array_equal(filled["chest"], points["neck"])
+    assert np.all(filled["neck"][:, 1] > points["neck"][:, 1] + 0.03)  # re-placed up the neck
+
+
+def test_without_chest_or_neck_the_chest_lies_under_the_head():
+    """Shoulders uneven about the spine (the left one 6 cm further out): the chest follows the
+    head, not the middle of the shoulders."""
+    points = standing()
+    del points["chest"], points["neck"]
+    points["left_shoulder"] = points["left_shoulder"] + (0.06, 0.0, 0.0)
+    chest = trunk_estimates(points)["chest"]
+    assert np.all(np.abs(chest[:, 0] - np.median(points["head"][:, 0])) < 0.01)
+    assert np.all(
+        chest[:, 0] < (points["left_shoulder"][:, 0] + points["right_shoulder"][:, 0]) / 2 - 0.02
+    )

@@ -107,3 +107,37 @@ def test_the_phone_video_counts_two_squats(therapist_page, site):
     assert repetitions_counted(page) == 2
     # beside the joint angles, how far a phone video's measurements can be trusted
     assert "Measured from a phone video" in page.inner_text("#measurement-source")
+    video_beside_the_skeletons_in_step(page)
+
+
+def video_beside_the_skeletons_in_step(page) -> None:
+    """The uploaded video plays next to the 3D viewer (muted, labelled), and seeking either one
+    moves the other: the skeleton frame is the video's time × the playback's frame rate."""
+    page.wait_for_selector("#viewer[data-ready='1']")
+    video, canvas = page.locator("#recording-video"), page.locator("#viewer-canvas")
+    assert video.get_attribute("aria-labelledby") == "video-label"
+    assert video.evaluate("v => v.muted && !v.autoplay")
+    side, stage = video.bounding_box(), canvas.bounding_box()
+    assert side["x"] + side["width"] <= stage["x"], (side, stage)  # beside it, to its left
+    assert side["y"] < stage["y"] + stage["height"] and stage["y"] < side["y"] + side["height"]
+    page.wait_for_function("document.getElementById('recording-video').readyState >= 1")
+    fps = page.evaluate("window.physioPlayback.meta.fps")
+
+    video.evaluate("v => { v.currentTime = 3.0; }")  # seeking the video moves the skeletons
+    expected = f"{round(3.0 * fps) / fps:.2f} s"
+    page.wait_for_function(
+        f"document.getElementById('frame-label').textContent === '{expected}'", timeout=10_000
+    )
+    assert page.evaluate("window.physioPlayback.frame") == round(3.0 * fps)
+
+    page.click("#step-fwd")  # moving the skeletons seeks the video
+    frame = page.evaluate("window.physioPlayback.frame")
+    page.wait_for_function(
+        f"Math.abs(document.getElementById('recording-video').currentTime - {frame / fps}) < 0.02"
+    )
+    page.click("#play")  # playing either plays both
+    page.wait_for_function("!document.getElementById('recording-video').paused")
+    page.wait_for_function(f"window.physioPlayback.frame > {frame + 5}")
+    video.evaluate("v => v.pause()")  # and pausing the video pauses the skeletons
+    page.wait_for_function("document.getElementById('play').textContent === 'Play'")
+    assert not page.evaluate("window.physioPlayback.playing")

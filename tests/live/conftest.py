@@ -52,9 +52,14 @@ def world(db) -> World:
 def exercise_with_model(world, live_model, monkeypatch):
     """An exercise of the world's clinic whose active model is `live_model` (no build)."""
     from tests.personas import make_exercise
+    from webapp.exercises.models import ExerciseModel, ModelStatus
     from webapp.live import services
 
     exercise = make_exercise(world.clinic, "Shoulder abduction", TUTOR)
+    # a stored version marks the exercise as followable; its loading is `live_model`
+    row = ExerciseModel.objects.create_next_version(exercise, status=ModelStatus.READY)
+    exercise.active_model = row
+    exercise.save(update_fields=["active_model"])
     monkeypatch.setattr(services, "exercise_model", lambda _exercise: live_model)
     return exercise
 

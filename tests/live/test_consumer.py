@@ -310,7 +310,7 @@ def test_bad_headers_binary_and_oversized_messages_are_answered(
         return answers, position
 
     answers, position = async_to_sync(run)()
-    assert [a["code"] for a in answers] == ["bad-header", "bad-header", "bad-message",
+    assert [a["code"] for a in answers] == ["bad-header", "bad-header", "bad-binary",
                                             "bad-message"]  # fmt: skip
     assert all(a["event"] == "error" and a["message"] for a in answers)
     assert position["frame"] == 0

@@ -39,3 +39,16 @@ def test_recording_page_offers_replay_as_live(world):
     client.force_login(world.therapist)
     html = client.get(f"/recordings/{recording.pk}/").content.decode()
     assert f"/live/replay/{recording.pk}/" in html
+
+
+def test_replay_of_an_exercise_without_a_model_is_refused_in_words(world):
+    """Every frame of a live session is aligned with the exercise's model: without one, the
+    recording page says why instead of opening a session that cannot follow."""
+    exercise = make_exercise(world.clinic)
+    recording = make_recording(world.patient, exercise)
+    client = Client()
+    client.force_login(world.therapist)
+    answer = client.post(f"/live/replay/{recording.pk}/", follow=True)
+    assert answer.redirect_chain[-1][0] == f"/recordings/{recording.pk}/"
+    assert "model is not ready" in answer.content.decode()
+    assert not LiveSession.objects.filter(replay_of=recording).exists()

@@ -143,11 +143,11 @@ def test_replacing_the_reference_builds_a_new_version_and_earlier_results_keep_t
     assert "model version 2 (in use)" in detail
 
 
-def test_a_reference_that_is_not_a_bvh_file_is_refused(client, world, exercise):
+def test_a_reference_that_is_no_readable_capture_file_is_refused(client, world, exercise):
     client.force_login(world.therapist)
     bad = SimpleUploadedFile("reference.csv", b"x,y,z\n1,2,3\n")
     answer = client.post(url("reference", exercise), {"tutor": bad})
-    assert answer.status_code == 400 and "BVH file" in answer.content.decode()
+    assert answer.status_code == 400 and "not a readable capture file" in answer.content.decode()
     exercise.refresh_from_db()
     assert exercise.models.count() == 0 and audit_rows(exercise) == []
 

@@ -121,6 +121,8 @@ CASES = [
     Case("recordings:status", "recording", "get", OWN_OBJECT),
     Case("recordings:rerun", "recording", "post", (302, 302, 302, 404, 403, 403, 302)),
     Case("recordings:result", "recording", "get", OWN_OBJECT),
+    # a phone video's frames: the world's recording is a BVH file, so there is none to see
+    Case("recordings:video", "recording", "get", (404, 404, 404, 404, 404, 404, 302)),
     Case("recordings:corrections", "recording", "get", STAFF_ONLY_OBJECT),
     # The recording's exercise is set, so confirming redirects to the recording.
     Case("recordings:confirm", "recording", "get", (302, 302, 302, 404, 302, 404, 302)),

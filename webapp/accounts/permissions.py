@@ -9,10 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import wraps
-from typing import Any
+from typing import Any, TypeVar
 
 from django.core.exceptions import PermissionDenied
-from django.db.models import QuerySet
+from django.db.models import Model, QuerySet
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import get_object_or_404
 
@@ -22,29 +22,32 @@ from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun, Recording
 
+Row = TypeVar("Row", bound=Model)
+
+
+def clinic_scoped(rows: QuerySet[Row], user: User, own: str | None = None) -> QuerySet[Row]:
+    """The one clinic-scope guard: of ``rows``, those of the user's clinic (none for a visitor
+    or an account without a clinic); for a patient, also only their own, the rows whose
+    ``own`` lookup (e.g. ``"patient__user"``) is them. ``own`` None: rows every member of the
+    clinic may see (its exercises)."""
+    if not user.is_authenticated or user.clinic_id is None:
+        return rows.none()
+    scoped = rows.filter(clinic_id=user.clinic_id)
+    if own is not None and user.is_patient:
+        return scoped.filter(**{own: user})
+    return scoped
+
 
 def visible_patients(user: User) -> QuerySet[Patient]:
-    if not user.is_authenticated or user.clinic_id is None:
-        return Patient.objects.none()
-    patients = Patient.objects.filter(clinic_id=user.clinic_id)
-    if user.is_patient:
-        return patients.filter(user=user)
-    return patients
+    return clinic_scoped(Patient.objects.all(), user, own="user")
 
 
 def visible_exercises(user: User) -> QuerySet[Exercise]:
-    if not user.is_authenticated or user.clinic_id is None:
-        return Exercise.objects.none()
-    return Exercise.objects.filter(clinic_id=user.clinic_id)
+    return clinic_scoped(Exercise.objects.all(), user)
 
 
 def visible_recordings(user: User) -> QuerySet[Recording]:
-    if not user.is_authenticated or user.clinic_id is None:
-        return Recording.objects.none()
-    recordings = Recording.objects.filter(clinic_id=user.clinic_id)
-    if user.is_patient:
-        return recordings.filter(patient__user=user)
-    return recordings
+    return clinic_scoped(Recording.objects.all(), user, own="patient__user")
 
 
 def get_patient_for_user(request: HttpRequest, pk: Any, audit: bool = True) -> Patient:

@@ -38,7 +38,7 @@ from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import MoveForm, UploadForm
 from webapp.recordings.recovery import check_analysable
 from webapp.recordings.results import result_data
-from webapp.recordings.uploads import check_skeleton, store_recording
+from webapp.recordings.uploads import accept_upload, check_skeleton
 
 DATE_FILTERS = [
     OpenApiParameter("since", OpenApiTypes.DATE, description="only on or after this day"),
@@ -150,17 +150,22 @@ class RecordingCreate(APIView):
         )
         if not form.is_valid():
             return Response(form.errors.get_json_data(), status=status.HTTP_400_BAD_REQUEST)
-        data = form.cleaned_data
-        recording, _ = store_recording(
-            form.parsed,
-            patient=data["patient"],
-            exercise=data["exercise"],
-            user=request.user,
-            pain_score=data["pain_score"],
-            note=data["note"],
-        )  # without an exercise, a worker recognises it: GET shows `suggested_exercise` later
+        # Without an exercise, a worker recognises it: GET shows `suggested_exercise` later.
+        recording, _ = accept_upload(form.parsed, form.cleaned_data, request.user)
         body = RecordingSerializer(recording).data
         return Response(body, status=status.HTTP_201_CREATED)
+
+
+MOVE_REFUSED = "Only the clinic's therapists move or delete recordings."
+
+
+def staff_recording(request: Request, pk, refusal: str, audit: bool = True):
+    """A recording the clinic's staff act on: another clinic's (or patient's) is 404 before a
+    patient's own is refused (403, ``refusal``), so a stranger learns nothing of it."""
+    recording = get_recording_for_user(request, pk, audit=audit and request.user.is_staff_member)
+    if not request.user.is_staff_member:
+        raise PermissionDenied(refusal)
+    return recording
 
 
 class RecordingDetail(generics.RetrieveAPIView):
@@ -171,15 +176,9 @@ class RecordingDetail(generics.RetrieveAPIView):
     def get_object(self):
         return get_recording_for_user(self.request, self.kwargs["pk"])
 
-    def staff_recording(self, request: Request, pk):
-        if not request.user.is_staff_member:
-            get_recording_for_user(request, pk, audit=False)  # 404 before 403 for strangers
-            raise PermissionDenied("Only the clinic's therapists move or delete recordings.")
-        return get_recording_for_user(request, pk, audit=False)  # the change is the event
-
     @extend_schema(request=RecordingMoveSerializer, responses={200: RecordingSerializer})
     def patch(self, request: Request, pk) -> Response:
-        recording = self.staff_recording(request, pk)
+        recording = staff_recording(request, pk, MOVE_REFUSED, audit=False)  # the move is the event
         RecordingMoveSerializer(data=request.data).is_valid(raise_exception=True)
         form = MoveForm(request.data, recording=recording, user=request.user)
         if not form.is_valid():
@@ -189,7 +188,7 @@ class RecordingDetail(generics.RetrieveAPIView):
 
     @extend_schema(request=None, responses={204: None})
     def delete(self, request: Request, pk) -> Response:
-        recovery.delete_recording(request, self.staff_recording(request, pk))
+        recovery.delete_recording(request, staff_recording(request, pk, MOVE_REFUSED, audit=False))
         return Response(status=status.HTTP_204_NO_CONTENT)
 
 
@@ -233,10 +232,7 @@ class RecordingCorrections(APIView):
     analysis; they become training data for the next model and the pass/fail threshold."""
 
     def latest(self, request: Request, pk):
-        if not request.user.is_staff_member:
-            get_recording_for_user(request, pk, audit=False)  # 404 before 403 for strangers
-            raise PermissionDenied("Only the clinic's therapists correct analyses.")
-        recording = get_recording_for_user(request, pk)
+        recording = staff_recording(request, pk, "Only the clinic's therapists correct analyses.")
         return recording.latest_succeeded_run()
 
     @extend_schema(responses={200: responses.CorrectionsSerializer})

@@ -109,6 +109,8 @@ def reference(request: HttpRequest, pk) -> JsonResponse:
     exercise = get_object_or_404(
         prescribed_exercises(patient, visible_exercises(request.user)), pk=pk
     )
+    if not exercise.tutor_ready():  # a reference video the worker has not read yet
+        return JsonResponse({"detail": "The reference movement is not ready yet."}, status=409)
     motion = exercise.tutor_motion()
     return JsonResponse(
         {

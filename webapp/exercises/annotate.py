@@ -11,6 +11,8 @@ the therapist types (line and column of the first error) and saves it when asked
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
+from functools import wraps
 
 from django.contrib import messages
 from django.contrib.auth.decorators import login_required
@@ -38,6 +40,25 @@ from webapp.exercises.forms import LandmarksForm
 from webapp.exercises.models import Exercise
 from webapp.exercises.rule_picker import RuleForm, appended
 
+READING = (
+    "The reference video is still being read (finding the person in each frame takes a minute "
+    "or two). Its key poses and rules can be edited once the exercise page shows it."
+)
+
+
+def reference_read(view: Callable[..., HttpResponse]) -> Callable[..., HttpResponse]:
+    """Answer 409 while a reference video waits for the worker: reading it here would hold the
+    page for minutes."""
+
+    @wraps(view)
+    def checked(request: HttpRequest, pk) -> HttpResponse:
+        if not get_exercise_for_user(request, pk).tutor_ready():
+            return HttpResponse(READING, status=409, content_type="text/plain; charset=utf-8")
+        return view(request, pk)
+
+    return checked
+
+
 __all__ = [
     "add_rule",
     "angle_curves",
@@ -50,6 +71,7 @@ __all__ = [
 
 @login_required
 @require_staff
+@reference_read
 def annotate_page(request: HttpRequest, pk) -> HttpResponse:
     """The page; an exercise with no grammar yet shows the one it would be given."""
     exercise = get_exercise_for_user(request, pk)
@@ -81,6 +103,7 @@ def page_context(exercise: Exercise, form: RuleForm, grammar: str | None = None)
 @login_required
 @require_staff
 @require_POST
+@reference_read
 def add_rule(request: HttpRequest, pk) -> HttpResponse:
     """The picked rule appended to the exercise's rules, saved when the whole text is valid."""
     exercise = get_exercise_for_user(request, pk)
@@ -100,6 +123,7 @@ def add_rule(request: HttpRequest, pk) -> HttpResponse:
 
 @login_required
 @require_staff
+@reference_read
 def tutor_data(request: HttpRequest, pk) -> JsonResponse:
     exercise = get_exercise_for_user(request, pk)
     motion = exercise.tutor_motion()
@@ -132,6 +156,7 @@ def tutor_data(request: HttpRequest, pk) -> JsonResponse:
 @login_required
 @require_staff
 @require_POST
+@reference_read
 def save_landmarks(request: HttpRequest, pk) -> JsonResponse:
     exercise = get_exercise_for_user(request, pk)
     motion = exercise.tutor_motion()
@@ -184,6 +209,7 @@ def grammar_verdict(text: str, exercise: Exercise) -> dict:
 @login_required
 @require_staff
 @require_POST
+@reference_read
 def check_grammar(request: HttpRequest, pk) -> JsonResponse:
     """POST {"text": ..., "save": bool}: the verdict; a valid text is stored when save is true."""
     exercise = get_exercise_for_user(request, pk)

@@ -4,7 +4,17 @@ from django import forms
 from django.core.exceptions import ValidationError
 
 from webapp.exercises.models import Exercise
-from webapp.recordings.uploads import ParsedUpload, parse_upload
+from webapp.recordings.uploads import ParsedUpload, parse_upload, recording_size
+
+# A reference may come from any source a recording may (webapp.recordings.forms.UploadForm).
+REFERENCE_HELP = (
+    "A recording of the exercise done well: BVH (.bvh, .bvh.gz), Kinect joint positions (.csv), "
+    "Azure Kinect or MediaPipe (.json), .trc or .c3d; or a phone video (.mp4, .mov, .webm) of "
+    "the whole body, which the system takes about a minute to read."
+)
+REFERENCE_WIDGET = forms.ClearableFileInput(
+    attrs={"accept": ".bvh,.gz,.csv,.json,.trc,.c3d,.mp4,.mov,.webm"}
+)
 
 
 def parse_int_list(text: str, field: str) -> list[int]:
@@ -21,8 +31,7 @@ class ExerciseForm(forms.ModelForm):
     still take them from a script that knows their frames (the demo, tests)."""
 
     tutor = forms.FileField(
-        label="Reference recording",
-        help_text="A recording of the exercise done well, as a BVH file (.bvh or .bvh.gz).",
+        label="Reference recording", help_text=REFERENCE_HELP, widget=REFERENCE_WIDGET
     )
     landmark_frames = forms.CharField(required=False, widget=forms.HiddenInput)
     landmark_types = forms.CharField(required=False, widget=forms.HiddenInput)
@@ -45,9 +54,7 @@ class ExerciseForm(forms.ModelForm):
 
     def clean_tutor(self):
         upload = self.cleaned_data["tutor"]
-        if not (upload.name or "").lower().endswith((".bvh", ".bvh.gz")):
-            raise ValidationError("The reference must be a BVH file (.bvh or .bvh.gz).")
-        self.parsed = parse_upload(upload)
+        self.parsed = parse_upload(upload, any_source=True)
         return upload
 
     def clean(self):
@@ -64,14 +71,10 @@ def validate_landmarks(frames: list[int], types: list[int], parsed: ParsedUpload
         raise ValidationError("Give one key-pose type for every key-pose frame.")
     if frames != sorted(frames):
         raise ValidationError("Key-pose frames must be in time order.")
-    if (
-        parsed is not None
-        and frames
-        and (frames[0] < 0 or frames[-1] >= parsed.motion.frames.shape[0])
-    ):
-        raise ValidationError(
-            f"Key-pose frames must lie between 0 and {parsed.motion.frames.shape[0] - 1}."
-        )
+    # A video's frame count comes from its header (the worker reads its frames later).
+    n_frames = recording_size(parsed)[0] if parsed is not None else None
+    if n_frames is not None and frames and (frames[0] < 0 or frames[-1] >= n_frames):
+        raise ValidationError(f"Key-pose frames must lie between 0 and {n_frames - 1}.")
     if any(t < 1 for t in types):
         raise ValidationError("Key-pose types are numbered from 1.")
 
@@ -128,8 +131,7 @@ class ReferenceForm(forms.Form):
     """A new reference recording for an exercise."""
 
     tutor = forms.FileField(
-        label="New reference recording",
-        help_text="A recording of the exercise done well, as a BVH file (.bvh or .bvh.gz).",
+        label="New reference recording", help_text=REFERENCE_HELP, widget=REFERENCE_WIDGET
     )
 
     def __init__(self, *args, **kwargs):
@@ -138,7 +140,5 @@ class ReferenceForm(forms.Form):
 
     def clean_tutor(self):
         upload = self.cleaned_data["tutor"]
-        if not (upload.name or "").lower().endswith((".bvh", ".bvh.gz")):
-            raise ValidationError("The reference must be a BVH file (.bvh or .bvh.gz).")
-        self.parsed = parse_upload(upload)
+        self.parsed = parse_upload(upload, any_source=True)
         return upload

@@ -3,15 +3,23 @@
 from __future__ import annotations
 
 import uuid
-from typing import TYPE_CHECKING
 
+from django.core.files.base import ContentFile
 from django.db import models, transaction
 from django.db.models import Max
 
+from analysis.bvh import Motion, dumps, read
+from analysis.landmarks import suggest_key_poses
+from analysis.sources import SUFFIXES, read_recording
+from analysis.sources.video import SUFFIXES as VIDEO_SUFFIXES
+from analysis.sources.video import Progress
 from webapp.accounts.models import Clinic
 
-if TYPE_CHECKING:
-    from analysis.bvh import Motion
+# A reference video's motion, solved once (the pose estimator takes ~30 ms a frame, too long for
+# every page and analysis) and stored beside the video as BVH text under this ending.
+SOLVED_VIDEO = ".motion.bvh"
+# The capture source a reference's file ending names, when the ending alone tells it.
+KIND_BY_ENDING = {".trc": "trc", ".c3d": "c3d", **{s: "video" for s in VIDEO_SUFFIXES}}
 
 
 class Exercise(models.Model):
@@ -50,20 +58,101 @@ class Exercise(models.Model):
     def __str__(self) -> str:
         return self.name
 
-    def tutor_motion(self) -> Motion:
-        """The parsed tutor recording (read from storage once per instance and tutor file).
+    def tutor_motion(self, progress: Progress | None = None) -> Motion:
+        """The tutor recording as a motion, whatever it was captured with (read once per
+        instance and tutor file; a video once at all, see `read_video_tutor`). ``progress``
+        hears the share of a video's frames read. Raises what `read_recording` and the storage
+        raise (BVHError, OSError)."""
+        return self.read_tutor(progress)[0]
 
-        Raises what `analysis.bvh.read` and the storage raise (BVHError, OSError).
-        """
-        # Imported here: the numerical core loads when a tutor is read, not at Django start.
-        from analysis.bvh import read
-
+    def read_tutor(self, progress: Progress | None = None) -> tuple[Motion, str]:
+        """The tutor's motion and its capture source's kind ("bvh", "kinect", "video", ...)."""
         cached = self.__dict__.get("_tutor_motion")
         if cached is None or cached[0] != self.tutor_file.name:
-            with self.tutor_file.open("rb") as handle:
-                cached = (self.tutor_file.name, read(handle.read()))
+            if self.tutor_is_video:
+                cached = (self.tutor_file.name, self.read_video_tutor(progress), "video")
+            else:
+                cached = (self.tutor_file.name, *self.read_tutor_file())
             self.__dict__["_tutor_motion"] = cached
-        return cached[1]
+        return cached[1], cached[2]
+
+    def read_tutor_file(self) -> tuple[Motion, str]:
+        with self.tutor_file.open("rb") as handle:
+            content = handle.read()
+        if not self.tutor_file.name.lower().endswith(SUFFIXES):
+            return read(content), "bvh"  # stored before other sources, under another ending
+        imported = read_recording(self.tutor_file.name, content)
+        return imported.motion, imported.report.kind
+
+    @property
+    def tutor_is_video(self) -> bool:
+        return self.tutor_file.name.lower().endswith(VIDEO_SUFFIXES)
+
+    @property
+    def solved_video_name(self) -> str:
+        return self.tutor_file.name + SOLVED_VIDEO
+
+    def tutor_ready(self) -> bool:
+        """False while a reference video waits for the worker to find the person in it."""
+        storage = self.tutor_file.storage
+        return not self.tutor_is_video or storage.exists(self.solved_video_name)
+
+    def tutor_kind(self) -> str:
+        """What the reference was captured with (`analysis.sources.RecordingSource.kind`); read
+        from the file only when its ending does not say (.csv: Kinect or MediaPipe, ...)."""
+        name = self.tutor_file.name.lower()
+        ending = next((e for e in KIND_BY_ENDING if name.endswith(e)), None)
+        if ending is not None:
+            return KIND_BY_ENDING[ending]
+        if not name.endswith((".csv", ".json")):
+            return "bvh"
+        return self.read_tutor()[1]
+
+    def read_video_tutor(self, progress: Progress | None) -> Motion:
+        """The reference video's motion: stored as BVH once solved (normally by the worker's
+        model build, which enqueueing the new reference starts). The first reading also puts
+        in suggested key poses when the marked ones do not fit it (as a new reference file
+        does), so the build it runs in can fit a model."""
+        storage = self.tutor_file.storage
+        if storage.exists(self.solved_video_name):
+            with storage.open(self.solved_video_name, "rb") as handle:
+                return read(handle.read())
+        with self.tutor_file.open("rb") as handle:
+            content = handle.read()
+        motion = read_recording(self.tutor_file.name, content, progress or self.reading).motion
+        self.take_key_poses(motion)
+        if self.pk is not None:
+            fields = ["tutor_landmark_frames", "tutor_landmark_types", "landmark_type_names"]
+            self.save(update_fields=[*fields, "involved_joints"])
+        if not storage.exists(self.solved_video_name):
+            storage.save(self.solved_video_name, ContentFile(dumps(motion).encode()))
+        return motion
+
+    def reading(self, fraction: float) -> None:
+        """The share of a reference video read, shown as the progress of this exercise's model
+        builds under way (the worker's build reads the video first; fitting takes seconds)."""
+        builds = ExerciseModel.objects.filter(exercise_id=self.pk, status=ModelStatus.RUNNING)
+        builds.update(progress=max(1, int(80 * fraction)))
+
+    def take_key_poses(self, motion: Motion) -> bool:
+        """Key poses for a new reference ``motion``, set on this row (not saved): the marked
+        ones when they fit its length, else the suggested ones (the page asks to check them).
+        Joints the new reference lacks are dropped. True when the marked ones were kept."""
+        frames = list(self.tutor_landmark_frames)
+        kept = bool(frames) and max(frames) < motion.frames.shape[0]
+        if not kept:
+            suggestion = suggest_key_poses(motion)
+            earlier = self.landmark_type_names or {}
+            self.tutor_landmark_frames = list(suggestion.frames)
+            self.tutor_landmark_types = list(suggestion.types)
+            self.landmark_type_names = {
+                str(t): earlier[str(t)]
+                for t in sorted(set(suggestion.types))
+                if earlier.get(str(t))
+            }
+        names = set(motion.skeleton.names)
+        self.involved_joints = [j for j in self.involved_joints if j in names]
+        return kept
 
 
 class ModelStatus(models.TextChoices):

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-import hashlib
-
 from django.core.files.base import ContentFile
 from django.db import transaction
 
-from analysis.bvh import Motion
-from analysis.landmarks import suggest_key_poses
 from webapp.exercises.models import Exercise, ExerciseModel
+from webapp.recordings.uploads import ParsedUpload
 from workers.tasks import build_exercise_model
 
 
@@ -35,36 +32,34 @@ def build_model_now(exercise: Exercise) -> ExerciseModel:
     return exercise.active_model
 
 
-def kept_key_poses(exercise: Exercise, motion: Motion) -> tuple[list[int], list[int], bool]:
-    """The key poses for a new reference: the marked ones when they fit its length, else the
-    ones the system suggests (so a model can be built; the page asks to check them)."""
-    frames = list(exercise.tutor_landmark_frames)
-    if frames and max(frames) < motion.frames.shape[0]:
-        return frames, list(exercise.tutor_landmark_types), True
-    suggestion = suggest_key_poses(motion)
-    return list(suggestion.frames), list(suggestion.types), False
+def save_reference(exercise: Exercise, parsed: ParsedUpload, name: str) -> None:
+    """Store a reference file under ``name`` with its real ending (so it is read back the way it
+    was checked: `Exercise.tutor_motion`), on the row (not saved)."""
+    exercise.tutor_checksum = parsed.checksum
+    exercise.tutor_file.save(f"{name}{parsed.suffix}", ContentFile(parsed.content), save=False)
 
 
-def replace_reference(exercise: Exercise, content: bytes, motion: Motion) -> ExerciseModel:
+def create_exercise(exercise: Exercise, parsed: ParsedUpload) -> None:
+    """Save a new exercise with its reference. A video's frames are the worker's to read (about
+    30 ms a frame): a model build starts at once and reads it, showing its progress."""
+    with transaction.atomic():
+        save_reference(exercise, parsed, str(exercise.pk))
+        exercise.save()
+        if exercise.tutor_is_video:
+            start_model_build(exercise)
+
+
+def replace_reference(exercise: Exercise, parsed: ParsedUpload) -> ExerciseModel:
     """Store a new reference recording and build a new model version from it.
 
     The earlier file and model versions stay: analyses keep the version they were made with.
     Until the new version is ready no version is active, so a new analysis never uses a model
-    of the old reference (it builds from the new one if it comes first)."""
-    checksum = hashlib.sha256(content).hexdigest()
-    suffix = ".bvh.gz" if content[:2] == b"\x1f\x8b" else ".bvh"
-    frames, types, kept = kept_key_poses(exercise, motion)
+    of the old reference (it builds from the new one if it comes first). A video's key poses
+    are checked when the worker has read it (`Exercise.read_video_tutor`)."""
     with transaction.atomic():
-        exercise.tutor_file.save(f"{exercise.pk}-{checksum[:12]}{suffix}", ContentFile(content))
-        exercise.tutor_checksum = checksum
-        exercise.tutor_landmark_frames, exercise.tutor_landmark_types = frames, types
-        names = set(motion.skeleton.names)
-        exercise.involved_joints = [j for j in exercise.involved_joints if j in names]
-        if not kept:
-            earlier = exercise.landmark_type_names or {}
-            exercise.landmark_type_names = {
-                str(t): earlier[str(t)] for t in sorted(set(types)) if earlier.get(str(t))
-            }
+        save_reference(exercise, parsed, f"{exercise.pk}-{parsed.checksum[:12]}")
+        if parsed.motion is not None:
+            exercise.take_key_poses(parsed.motion)
         exercise.active_model = None
         exercise.save()
         return start_model_build(exercise)

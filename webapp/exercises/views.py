@@ -1,11 +1,9 @@
 from __future__ import annotations
 
-import hashlib
 import uuid
 
 from django.contrib import messages
 from django.contrib.auth.decorators import login_required
-from django.core.files.base import ContentFile
 from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import redirect, render
 from django.utils import timezone
@@ -18,6 +16,12 @@ from webapp.exercises.annotate_data import tutor_pose
 from webapp.exercises.forms import ExerciseEditForm, ExerciseForm, ReferenceForm
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from webapp.exercises.training_report import training_report
+from webapp.recordings.sources import kind_reliability
+
+READING_VIDEO = (
+    "The reference video is still being read: the person is found in each of its frames, "
+    "about a minute for a minute of video."
+)
 
 
 @login_required
@@ -37,7 +41,7 @@ def exercise_create(request: HttpRequest) -> HttpResponse:
     if request.method == "POST" and form.is_valid():
         exercise = save_new_exercise(form, request.user.clinic)
         log.record(request, "create", exercise)
-        messages.success(request, f"Exercise {exercise.name} created. Mark its key poses next.")
+        messages.success(request, created_message(exercise))
         return redirect("exercises:detail", pk=exercise.pk)
     status = 400 if request.method == "POST" else 200
     context = {
@@ -51,6 +55,15 @@ def exercise_create(request: HttpRequest) -> HttpResponse:
     return render(request, "exercises/form.html", context, status=status)
 
 
+def created_message(exercise: Exercise) -> str:
+    if exercise.tutor_is_video:
+        return (
+            f"Exercise {exercise.name} created. Its video is being read (about a minute for a "
+            "minute of video); key poses are then suggested for you to check."
+        )
+    return f"Exercise {exercise.name} created. Mark its key poses next."
+
+
 def save_new_exercise(form: ExerciseForm, clinic) -> Exercise:
     exercise: Exercise = form.save(commit=False)
     exercise.clinic = clinic
@@ -58,11 +71,7 @@ def save_new_exercise(form: ExerciseForm, clinic) -> Exercise:
     exercise.tutor_landmark_types = form.cleaned_data["types_list"]
     types = sorted(set(exercise.tutor_landmark_types))
     exercise.landmark_type_names = {str(t): f"key pose {t}" for t in types}
-    content = form.parsed.content
-    exercise.tutor_checksum = hashlib.sha256(content).hexdigest()
-    suffix = ".bvh.gz" if content[:2] == b"\x1f\x8b" else ".bvh"
-    exercise.tutor_file.save(f"{exercise.pk}{suffix}", ContentFile(content), save=False)
-    exercise.save()
+    services.create_exercise(exercise, form.parsed)
     return exercise
 
 
@@ -70,7 +79,13 @@ def save_new_exercise(form: ExerciseForm, clinic) -> Exercise:
 @require_staff
 def exercise_detail(request: HttpRequest, pk) -> HttpResponse:
     exercise = get_exercise_for_user(request, pk)
-    context = {"exercise": exercise, "versions": exercise.models.all()[:20]}
+    context = {
+        "exercise": exercise,
+        "versions": exercise.models.all()[:20],
+        # A reference video is read by the worker; until then the page has no motion to show.
+        "tutor_ready": exercise.tutor_ready(),
+        "measured_with": kind_reliability(exercise.tutor_kind()),
+    }
     row = shown_model(exercise, request.GET.get("model"))
     if row is not None:
         context.update(model=row, report=training_report(row))
@@ -159,14 +174,9 @@ def replace_reference(request: HttpRequest, pk) -> HttpResponse:
     exercise = get_exercise_for_user(request, pk)
     form = ReferenceForm(request.POST or None, request.FILES or None)
     if request.method == "POST" and form.is_valid():
-        parsed = form.parsed
-        row = services.replace_reference(exercise, parsed.content, parsed.motion)
+        row = services.replace_reference(exercise, form.parsed)
         log.record(request, "update", exercise)
-        messages.success(
-            request,
-            f"New reference saved; model version {row.version} is built from it. "
-            "Earlier results keep the version they were made with. Check the key poses.",
-        )
+        messages.success(request, replaced_message(exercise, row.version))
         return redirect("exercises:detail", pk=exercise.pk)
     status = 400 if request.method == "POST" else 200
     context = {
@@ -180,11 +190,25 @@ def replace_reference(request: HttpRequest, pk) -> HttpResponse:
     return render(request, "exercises/form.html", context, status=status)
 
 
+def replaced_message(exercise: Exercise, version: int) -> str:
+    reading = (
+        "The video is read first (about a minute for a minute of video); "
+        if exercise.tutor_is_video
+        else ""
+    )
+    return (
+        f"New reference saved; {reading}model version {version} is built from it. "
+        "Earlier results keep the version they were made with. Check the key poses."
+    )
+
+
 @login_required
 @require_staff
 def reference_data(request: HttpRequest, pk) -> JsonResponse:
     """The reference's positions for the player on the exercise page."""
     exercise = get_exercise_for_user(request, pk)
+    if not exercise.tutor_ready():  # never the pose estimator inside a request
+        return JsonResponse({"message": READING_VIDEO}, status=409)
     motion = exercise.tutor_motion()
     pose = tutor_pose(motion)
     return JsonResponse(

@@ -31,6 +31,9 @@ class LiveSessionCreate(APIView):
         responses={
             201: LIVE_SESSION_CREATED,
             404: OpenApiResponse(description="No such patient or exercise in your clinic."),
+            409: OpenApiResponse(
+                description="The exercise has no model built yet: build it first."
+            ),
         },
     )
     def post(self, request: Request) -> Response:
@@ -38,6 +41,8 @@ class LiveSessionCreate(APIView):
         data.is_valid(raise_exception=True)
         patient = get_patient_for_user(request, data.validated_data["patient"])
         exercise = get_exercise_for_user(request, data.validated_data["exercise"])
+        if exercise.active_model_id is None:  # every frame is aligned with the model
+            return Response({"detail": services.NOT_BUILT}, status=status.HTTP_409_CONFLICT)
         live = services.create_session(patient=patient, exercise=exercise, user=request.user)
         body = {"id": str(live.pk), "ws": live.ws_path, "page": f"/live/{live.pk}/"}
         return Response(body, status=status.HTTP_201_CREATED)

@@ -24,6 +24,11 @@ A batch of frames (``{"type": "frames", ...}``, `analysis.live.session`) is answ
 message, a JSON array of its events (none when it has none): the per-message cost of Daphne and
 Channels, most of a frame's cost, is paid once per batch. JSON is read and written with orjson
 when it is installed (a few times faster than the standard library on frames of numbers).
+
+A batch may also come as a WebSocket binary message of float32 values (`analysis.live.frames`,
+read with one `numpy.frombuffer`): it is answered the same way, a JSON array of its events. The
+``ready`` event says which version of that form the server reads (``binary_frames``), so a
+capture client sends binary frames only to a server that takes them; JSON frames keep working.
 """
 
 from __future__ import annotations
@@ -42,6 +47,9 @@ from django.conf import settings
 from analysis.bvh import AnalysisInputError
 from analysis.live import LiveSession as SessionState
 from analysis.live import header_text
+from analysis.live.frames import VERSION as BINARY_VERSION
+from analysis.live.frames import decode_frames, take_frames
+from analysis.live.session import ProtocolError, error_event
 from webapp.live import services
 from webapp.live.auth import scope_user
 from webapp.live.models import LiveSession, LiveStatus
@@ -98,7 +106,7 @@ class LiveConsumer(AsyncWebsocketConsumer):
         )
         state = SESSIONS.get(self.key)
         if state is not None:
-            await self.send_json(state.ready())
+            await self.send_json(_ready(state.ready()))
         elif live.status == LiveStatus.ENDED:
             await self.send_json({**live.summary, "event": "summary"})
         elif live.replay_of_id is not None and not self.watching:
@@ -127,11 +135,16 @@ class LiveConsumer(AsyncWebsocketConsumer):
 
     async def receive(self, text_data: str | None = None, bytes_data: bytes | None = None) -> None:
         received = time.perf_counter()
-        if text_data is None or len(text_data) > MAX_MESSAGE_BYTES:
-            await self.send_json(_error("bad-message", "send JSON text messages under 1 MB"))
+        content = text_data if text_data is not None else bytes_data
+        if content is None or len(content) > MAX_MESSAGE_BYTES:
+            text = "send messages under 1 MB: JSON text, or frames in binary form"
+            await self.send_json(_error("bad-message", text))
             return
         if self.watching:
             await self.send_json(_error("read-only", "a watching connection sends nothing"))
+            return
+        if bytes_data is not None and text_data is None:
+            await self.process_binary(bytes_data, received)
             return
         try:
             message = _loads(text_data)
@@ -141,20 +154,36 @@ class LiveConsumer(AsyncWebsocketConsumer):
         await self.process(message, received)
 
     async def process(self, message: Any, received: float) -> None:
-        """Answer one message: to this connection, and to the group's other connections."""
+        """Answer one JSON message: to this connection, and to the group's other connections."""
+        state = await self._state_or_error()
+        if state is not None:
+            batch = isinstance(message, dict) and message.get("type") == "frames"
+            await self._answer(state, state.handle(message), received, batch=batch)
+
+    async def process_binary(self, data: bytes, received: float) -> None:
+        """Answer a batch of frames in binary form as a JSON batch is answered."""
         try:
-            state = await self._state(message)
-        except (AnalysisInputError, ValueError) as error:
-            await self.send_json(_error("bad-header", " ".join(str(error).split())))
+            block = decode_frames(data)
+        except ProtocolError as error:
+            await self.send_json(error_event(error))
             return
-        events = state.handle(message)
+        state = await self._state_or_error()
+        if state is not None:
+            await self._answer(state, take_frames(state, block), received, batch=True)
+
+    async def _answer(
+        self, state: SessionState, events: list[dict[str, Any]], received: float, *, batch: bool
+    ) -> None:
+        """Send a message's events (a batch's in one JSON array), show them to the group."""
         for event in events:
             if event["event"] == "position":
                 event["latency_ms"] = round((time.perf_counter() - received) * 1000.0, 3)
                 state.delivery_ms.append(event["latency_ms"])
-            if event["event"] == "summary":
+            elif event["event"] == "summary":
                 await self._finish(state, event)
-        if isinstance(message, dict) and message.get("type") == "frames":
+            elif event["event"] == "ready":
+                _ready(event)
+        if batch:
             if events:
                 await self.send(text_data=_dumps(events))
         else:
@@ -175,7 +204,16 @@ class LiveConsumer(AsyncWebsocketConsumer):
         repetitions = max(counts) if counts else None
         await database_sync_to_async(services.record_activity)(self.key, repetitions)
 
-    async def _state(self, message: Any) -> SessionState:
+    async def _state_or_error(self) -> SessionState | None:
+        """The session's state (made at its first message), or None after answering with an
+        error when the exercise's model cannot be had."""
+        try:
+            return await self._state()
+        except (AnalysisInputError, ValueError) as error:
+            await self.send_json(_error("bad-header", " ".join(str(error).split())))
+            return None
+
+    async def _state(self) -> SessionState:
         state = SESSIONS.get(self.key)
         if state is None:
             model = await database_sync_to_async(services.exercise_model)(self.live.exercise)
@@ -252,6 +290,12 @@ class LiveConsumer(AsyncWebsocketConsumer):
         except Exception:  # a replay must never take the server down
             log.exception("replay of live session %s failed", self.key)
             await self.send_json(_error("replay-failed", "the replay stopped"))
+
+
+def _ready(event: dict[str, Any]) -> dict[str, Any]:
+    """A ``ready`` event, with the version of binary frames this server reads."""
+    event["binary_frames"] = BINARY_VERSION
+    return event
 
 
 def _loads(text: str) -> Any:

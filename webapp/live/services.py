@@ -16,22 +16,19 @@ from analysis.bvh import Motion, read
 from analysis.live import rehearse
 from analysis.pipeline import FittedModel
 from webapp.accounts.models import User
+from webapp.accounts.permissions import clinic_scoped
 from webapp.exercises.models import Exercise
 from webapp.live.models import LiveSession, LiveStatus
 from webapp.patients.models import Patient, Prescription
 from webapp.recordings.models import Recording
 from webapp.recordings.storage import read_verified
 from webapp.recordings.uploads import MIN_FRAMES, ParsedUpload, store_recording
+from workers.exercise_models import NoUsableModelError, load_active
 
 
 def visible_sessions(user: User) -> QuerySet[LiveSession]:
     """Live sessions of the user's clinic (a patient: only their own)."""
-    if not user.is_authenticated or user.clinic_id is None:
-        return LiveSession.objects.none()
-    sessions = LiveSession.objects.filter(clinic_id=user.clinic_id)
-    if user.is_patient:
-        return sessions.filter(patient__user=user)
-    return sessions
+    return clinic_scoped(LiveSession.objects.all(), user, own="patient__user")
 
 
 def session_for(user: User, pk: Any) -> LiveSession | None:
@@ -50,25 +47,38 @@ def create_session(
     )  # fmt: skip
 
 
-_LOADED: dict[Any, FittedModel] = {}  # model row id -> the model, in this process
-_LOADED_MAX = 16
+# Loaded models are cached by `workers.exercise_models` (one cache per process); this only
+# remembers which of them this process has already rehearsed.
+_REHEARSED: set[Any] = set()
+
+
+class ModelNotReadyError(ValueError):
+    """A live session cannot follow the exercise: it has no model this server can use. The
+    message is for the therapist: the consumer answers the session's start with it (an
+    ``error`` event), which the capture client prints as its reason for stopping."""
+
+
+NOT_BUILT = (
+    "This exercise's model is not ready, so a live session cannot follow it yet. Build the model "
+    "on the exercise's page (Build model), wait until it is ready, then start the session again."
+)
+OUT_OF_DATE = (
+    "This exercise's model was made by an earlier version of the software and must be built "
+    "again: use Build model on the exercise's page, then start the session again."
+)
 
 
 def exercise_model(exercise: Exercise) -> FittedModel:
-    """The exercise's active model (built now, from the tutor, if it has none yet). A model row
-    never changes once stored, so each is read and unpickled once per process: sessions that
-    start together do not each pay for it."""
-    from workers.exercise_models import active_model
-
-    exercise.refresh_from_db(fields=["active_model"])
-    cached = _LOADED.get(exercise.active_model_id)
-    if cached is not None:
-        return cached
-    row, model = active_model(exercise)
-    rehearse(model)  # here, in a worker thread, not while the event loop's frames wait
-    if len(_LOADED) >= _LOADED_MAX:
-        _LOADED.pop(next(iter(_LOADED)))
-    _LOADED[row.pk] = model
+    """The exercise's active model, loaded (never built: fitting takes seconds to minutes, and
+    this runs for a server answering live frames). ModelNotReadyError, with the therapist's reason,
+    when the exercise has none usable; the live start form does not offer such exercises."""
+    try:
+        row, model = load_active(exercise)
+    except NoUsableModelError as missing:
+        raise ModelNotReadyError(OUT_OF_DATE if missing.stale else NOT_BUILT) from missing
+    if row.pk not in _REHEARSED:
+        rehearse(model)  # here, in a worker thread, not while the event loop's frames wait
+        _REHEARSED.add(row.pk)
     return model
 
 

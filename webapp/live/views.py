@@ -67,6 +67,9 @@ def replay(request: HttpRequest, pk: Any) -> HttpResponse:
     recording = get_recording_for_user(request, pk)
     if recording.exercise is None:
         raise Http404("The recording has no exercise to align with.")
+    if recording.exercise.active_model_id is None:  # every frame is aligned with the model
+        messages.error(request, services.NOT_BUILT)
+        return redirect("recordings:detail", pk=recording.pk)
     live = services.create_session(
         patient=recording.patient, exercise=recording.exercise, user=request.user,
         replay_of=recording,

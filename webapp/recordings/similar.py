@@ -18,9 +18,11 @@ import numpy as np
 from django.conf import settings
 from django.core.cache import cache
 
-from analysis.bvh import Motion, read
+from analysis.bvh import Motion
 from analysis.kinematics import positions
 from analysis.retrieval import MotionRetriever, recording_features
+from analysis.sources import read_recording
+from analysis.sources.video import SUFFIXES as VIDEO_SUFFIXES
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
 from webapp.recordings.models import Recording
@@ -41,20 +43,35 @@ def motion_features(motion: Motion) -> np.ndarray:
     return recording_features(world, motion.skeleton.names, motion.fps, target_fps=FRAME_RATE)
 
 
-def file_features(field, checksum: str) -> np.ndarray:
-    key = f"retrieval-features:{checksum or field.name}"
+def _cached_features(key: str, read: Callable[[], Motion]) -> np.ndarray:
     cached = cache.get(key)
     if cached is None:
-        with field.open("rb") as handle:
-            cached = motion_features(read(handle.read())).astype(np.float32)
+        cached = motion_features(read()).astype(np.float32)
         cache.set(key, cached, CACHE_SECONDS)
     return cached
 
 
-def exercise_features(exercise: Exercise) -> np.ndarray:
+def file_features(field, checksum: str) -> np.ndarray | None:
+    """A stored recording's features, whatever it was captured with; None for a phone video
+    (finding the person in its frames is the worker's long job, not a page's)."""
+    if field.name.lower().endswith(VIDEO_SUFFIXES):
+        return None
+
+    def read() -> Motion:
+        with field.open("rb") as handle:
+            return read_recording(field.name, handle.read()).motion
+
+    return _cached_features(f"retrieval-features:{checksum or field.name}", read)
+
+
+def exercise_features(exercise: Exercise) -> np.ndarray | None:
+    """The reference's features; None while a reference video waits for the worker."""
+    if not exercise.tutor_ready():
+        return None
     name = exercise.tutor_file.name.encode()
     checksum = exercise.tutor_checksum or hashlib.sha256(name).hexdigest()
-    return file_features(exercise.tutor_file, f"tutor-{exercise.pk}-{checksum}")
+    return _cached_features(f"retrieval-features:tutor-{exercise.pk}-{checksum}",
+                            exercise.tutor_motion)  # fmt: skip
 
 
 def fitted(features: list[np.ndarray], labels: list[Any]) -> MotionRetriever:
@@ -70,7 +87,7 @@ def labelled_examples(candidates: list[Exercise]) -> list[tuple[Exercise | Recor
     return examples
 
 
-def example_features(example: Exercise | Recording) -> np.ndarray:
+def example_features(example: Exercise | Recording) -> np.ndarray | None:
     if isinstance(example, Exercise):
         return exercise_features(example)
     return file_features(example.file, example.checksum)
@@ -90,10 +107,14 @@ def identify_exercise(
     features: list[np.ndarray] = []
     labels: list[Any] = []
     for done, (example, label) in enumerate(examples, start=1):
-        features.append(example_features(example))
-        labels.append(label)
+        found = example_features(example)
+        if found is not None:
+            features.append(found)
+            labels.append(label)
         if progress is not None:
             progress(done / len(examples))
+    if not features:
+        return None
     retriever = fitted(features, labels)
     index, distance = retriever.most_similar(motion_features(motion), k=1)[0]
     by_id = {str(e.pk): e for e in candidates}
@@ -116,12 +137,12 @@ def most_similar(recording: Recording, user: User, k: int = 5) -> list[dict[str,
     """The k earlier recordings nearest to this one (paper 002 DTW distance), nearest first."""
     if recording.exercise_id is None:
         return []
-    earlier = comparable_recordings(recording, user)
-    if not earlier:
-        return []
-    features = [file_features(r.file, r.checksum) for r in earlier]
-    retriever = fitted(features, [str(r.pk) for r in earlier])
     query = file_features(recording.file, recording.checksum)
+    read = [(r, file_features(r.file, r.checksum)) for r in comparable_recordings(recording, user)]
+    earlier = [r for r, found in read if found is not None]
+    if query is None or not earlier:
+        return []
+    retriever = fitted([f for _, f in read if f is not None], [str(r.pk) for r in earlier])
     return [
         {
             "recording": str(earlier[index].pk),

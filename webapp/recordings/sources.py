@@ -29,7 +29,7 @@ RELIABILITY = {
     "trc": SourceReliability(
         "marker or keypoint positions (.trc)",
         "hips, knees, ankles and elbows",
-        "the trunk, placed between hips and shoulders, and twists of the arms and thighs",
+        "the trunk, estimated from the neck, hips and shoulders, and twists of the arms and thighs",
     ),
     "c3d": SourceReliability(
         "a marker system (C3D)",
@@ -51,4 +51,9 @@ RELIABILITY = {
 
 
 def source_reliability(source: RecordingSource) -> SourceReliability:
-    return RELIABILITY.get(source.kind, RELIABILITY["bvh"])
+    return kind_reliability(source.kind)
+
+
+def kind_reliability(kind: str) -> SourceReliability:
+    """By the source's kind alone (an exercise's reference, which has no analysis result)."""
+    return RELIABILITY.get(kind, RELIABILITY["bvh"])

@@ -1,7 +1,9 @@
 """Accepting an uploaded recording: size, parse, skeleton and duplicate checks, then storage.
 
-Nothing is stored unless every check passes, and the recording, its first analysis run and the
-file are written in one transaction; the analysis is enqueued only after the commit.
+`accept_upload` is the one way an upload validated by `UploadForm` (the upload page and
+``POST /api/v1/recordings/``) becomes a stored recording. Nothing is stored unless every check
+passes, and the recording, its first analysis run and the file are written in one transaction;
+the analysis is enqueued only after the commit.
 """
 
 from __future__ import annotations
@@ -9,7 +11,9 @@ from __future__ import annotations
 import gzip
 import hashlib
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from django.conf import settings
 from django.core.exceptions import ValidationError
@@ -179,7 +183,7 @@ def check_plausible(motion: Motion, exercise: Exercise | None = None) -> None:
     time, length, values, memory), with this site's limits; with the exercise, its model's frame
     rate and joints give the memory estimate."""
     fps, joints = None, None
-    if exercise is not None:
+    if exercise is not None and exercise.tutor_ready():  # a reference video: the worker checks
         tutor = exercise.tutor_motion()
         fps, joints = tutor.fps, len(tutor.skeleton.names)
     try:
@@ -196,6 +200,8 @@ def check_skeleton(motion: Motion | None, exercise: Exercise) -> None:
     if motion is None:
         return
     check_plausible(motion, exercise)
+    if not exercise.tutor_ready():  # a reference video still being read: the worker maps it
+        return
     tutor = exercise.tutor_motion()
     try:
         map_onto(motion.with_frames(motion.frames[:CHECK_FRAMES]), tutor.skeleton)
@@ -235,6 +241,19 @@ def pending_upload(patient: Patient, checksum: str) -> Recording | None:
     )
 
 
+def accept_upload(
+    parsed: ParsedUpload | None, data: Mapping[str, Any], user: User
+) -> tuple[Recording, AnalysisRun | None]:
+    """Store an upload `UploadForm` accepted (its ``parsed`` file and ``cleaned_data``) and start
+    its analysis, or, without an exercise, a worker's recognition of the exercise."""
+    if parsed is None:  # the form keeps no file once it refused it
+        raise ValueError("accept_upload takes the parsed file of a valid upload form")
+    return store_recording(
+        parsed, patient=data["patient"], exercise=data.get("exercise"), user=user,
+        pain_score=data.get("pain_score"), note=data.get("note") or "", effort=data.get("effort"),
+    )  # fmt: skip
+
+
 def store_recording(
     parsed: ParsedUpload,
     *,
@@ -243,6 +262,7 @@ def store_recording(
     user: User,
     pain_score: int | None = None,
     note: str = "",
+    effort: int | None = None,
 ) -> tuple[Recording, AnalysisRun | None]:
     """Store the recording, its file and its first run in one transaction; without an exercise,
     a worker is asked to recognise it instead (`services.start_recognition`, after the commit).
@@ -254,11 +274,10 @@ def store_recording(
     pending = pending_upload(patient, parsed.checksum)
     if pending is not None:
         return reuse_pending(
-            pending, exercise=exercise, user=user, pain_score=pain_score, note=note
+            pending, exercise=exercise, user=user, pain_score=pain_score, note=note, effort=effort
         )
-    recording = new_recording(
-        parsed, patient=patient, exercise=exercise, user=user, pain_score=pain_score, note=note
-    )
+    recording = new_recording(parsed, patient=patient, exercise=exercise, user=user)
+    recording.pain_score, recording.note, recording.effort = pain_score, note, effort
     suffix = parsed.suffix
     try:
         with transaction.atomic():
@@ -282,13 +301,16 @@ def start_first_step(recording: Recording) -> AnalysisRun | None:
 
 
 def reuse_pending(
-    recording: Recording, *, exercise, user, pain_score, note
+    recording: Recording, *, exercise, user, pain_score, note, effort=None
 ) -> tuple[Recording, AnalysisRun | None]:
     """The uploader's new answers on the waiting upload (its file is the same bytes), and its
     analysis started when an exercise is now named (else its recognition, unless under way)."""
     recording.uploaded_by, recording.uploaded_at = user, timezone.now()
     recording.pain_score, recording.note = pain_score, note
     fields = ["uploaded_by", "uploaded_at", "pain_score", "note"]
+    if effort is not None:  # asked of patients only: a staff upload keeps the earlier answer
+        recording.effort = effort
+        fields.append("effort")
     with transaction.atomic():
         recording.save(update_fields=fields)
         Patient.objects.filter(pk=recording.patient_id).update(last_activity_at=timezone.now())
@@ -299,7 +321,7 @@ def reuse_pending(
     return recording, run
 
 
-def new_recording(parsed: ParsedUpload, *, patient, exercise, user, pain_score, note) -> Recording:
+def new_recording(parsed: ParsedUpload, *, patient, exercise, user) -> Recording:
     frames, fps = recording_size(parsed)
     return Recording(
         clinic=patient.clinic,
@@ -312,7 +334,5 @@ def new_recording(parsed: ParsedUpload, *, patient, exercise, user, pain_score, 
         n_joints=len(parsed.motion.skeleton.names) if parsed.motion is not None else VIDEO_JOINTS,
         fps=fps,
         duration_s=frames / fps,
-        pain_score=pain_score,
-        note=note,
         uploaded_by=user,
     )

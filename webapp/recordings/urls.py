@@ -1,6 +1,6 @@
 from django.urls import path
 
-from webapp.recordings import notes, recognition, recovery_views, views
+from webapp.recordings import notes, recognition, recovery_views, video_views, views
 
 app_name = "recordings"
 
@@ -17,4 +17,5 @@ urlpatterns = [
     path("<uuid:pk>/restore/", recovery_views.restore, name="restore"),
     path("deleted/", recovery_views.deleted, name="deleted"),
     path("<uuid:pk>/notes/", notes.add, name="add-note"),
+    path("<uuid:pk>/video/", video_views.video, name="video"),
 ]

@@ -22,7 +22,7 @@ from webapp.recordings.models import AnalysisRun
 from webapp.recordings.notes import NoteForm, notes_of
 from webapp.recordings.recognition import recognition_status
 from webapp.recordings.results import result_data
-from webapp.recordings.uploads import store_recording
+from webapp.recordings.uploads import accept_upload
 
 
 def upload_form(request: HttpRequest) -> UploadForm:
@@ -37,18 +37,7 @@ def upload_form(request: HttpRequest) -> UploadForm:
 def upload(request: HttpRequest) -> HttpResponse:
     form = upload_form(request)
     if request.method == "POST" and form.is_valid():
-        data = form.cleaned_data
-        recording, _ = store_recording(
-            form.parsed,
-            patient=data["patient"],
-            exercise=data["exercise"],
-            user=request.user,
-            pain_score=data["pain_score"],
-            note=data["note"],
-        )
-        if data.get("effort") is not None:  # asked of patients only; store_recording predates it
-            recording.effort = data["effort"]
-            recording.save(update_fields=["effort"])
+        recording, _ = accept_upload(form.parsed, form.cleaned_data, request.user)
         if recording.exercise_id is None:  # recognised by a worker; confirmed on its page
             messages.info(request, "Recording uploaded. Please confirm which exercise it is below.")
             return redirect("recordings:detail", pk=recording.pk)

@@ -44,7 +44,7 @@ def positions_bytes(arrays: dict[str, np.ndarray]) -> bytes:
 def tutor_joint_names(run: AnalysisRun) -> list[str]:
     """ROOT/JOINT names of the exercise's tutor, in file order (the playback skeleton's order)."""
     exercise = run.recording.exercise
-    if exercise is None or not exercise.tutor_file:
+    if exercise is None or not exercise.tutor_file or not exercise.tutor_ready():
         return []
     try:
         return list(exercise.tutor_motion().skeleton.names)

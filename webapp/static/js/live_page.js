@@ -84,7 +84,18 @@ async function pollOffline() {
 }
 
 const HANDLERS = { position, repetition, summary, ready: () => {},
-  error: (e) => { errors += 1; $("errors").textContent = errors; console.warn(e.message); } };
+  error: showError };
+
+// The session's reason for refusing or dropping frames, in the therapist's words (the model
+// not built yet, a skeleton that does not fit): shown, not only counted.
+function showError(event) {
+  errors += 1;
+  $("errors").textContent = errors;
+  if (event.message) {
+    $("live-error").textContent = event.message;
+    $("live-error").hidden = false;
+  }
+}
 
 function connect() {
   const scheme = location.protocol === "https:" ? "wss" : "ws";

@@ -1,6 +1,7 @@
 // The recording page: loads the playback payload, drives the 3D viewer, the timeline with
 // repetitions, key poses and feedback captions, and the Plotly charts linked to playback.
 import { Playback, SKELETON_COLOURS } from "./viewer.js";
+import { linkVideo } from "./video_sync.js";
 
 // Paper 001's guidance types in the words the therapist reads (as webapp/reports/timeline.py).
 const GUIDANCE_WORDS = { "too fast": "too fast", "too slow": "too slow", overdone: "went too far", incomplete: "did not reach far enough" };
@@ -39,6 +40,8 @@ function addControls(playback) {
   const play = $("play");
   const setPlaying = (on) => { playback.playing = on; play.textContent = on ? "Pause" : "Play"; };
   play.addEventListener("click", () => setPlaying(!playback.playing));
+  // Started or stopped elsewhere too (the video's own controls, the end of the video).
+  playback.onPlaying((on) => { play.textContent = on ? "Pause" : "Play"; });
   $("step-back").addEventListener("click", () => { setPlaying(false); playback.setFrame(playback.frame - 1); });
   $("step-fwd").addEventListener("click", () => { setPlaying(false); playback.setFrame(playback.frame + 1); });
   $("speed").addEventListener("change", (e) => { playback.speed = Number(e.target.value); });
@@ -149,6 +152,8 @@ async function main() {
   if (!data) return;
   const playback = new Playback(root, data.meta, data.positions);
   window.physioPlayback = playback;  // for the browser tests and measurements
+  const video = $("recording-video");
+  if (video) linkVideo(playback, video);
   addToggles(playback);
   addControls(playback);
   const moveCursor = addTimeline(playback);

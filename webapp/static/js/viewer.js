@@ -22,7 +22,11 @@ export class Playback {
     this.nFrames = meta.frames;
     this.nJoints = meta.joints;
     this.frame = 0;
-    this.playing = false;
+    this.playingListeners = [];
+    this.playingNow = false;
+    // An outside clock (the recording's video, video_sync.js) that playing follows instead of
+    // counting frames itself: { frame() -> frame number now, seek(frame) }.
+    this.clock = null;
     this.speed = 1;
     this.loop = null; // [start, end] of the repetition being looped
     this.visible = meta.skeletons.map((s, i) => i === 0 || s.key === "tutor_adjusted");
@@ -38,6 +42,17 @@ export class Playback {
   }
 
   onFrame(listener) { this.listeners.push(listener); }
+
+  // Every start and stop, whoever causes it (buttons, the timeline, the video), is heard here.
+  onPlaying(listener) { this.playingListeners.push(listener); }
+
+  get playing() { return this.playingNow; }
+
+  set playing(on) {
+    const changed = on !== this.playingNow;
+    this.playingNow = on;
+    if (changed) this.playingListeners.forEach((listener) => listener(on));
+  }
 
   buildScene() {
     const canvas = this.root.querySelector("canvas");
@@ -166,7 +181,9 @@ export class Playback {
     this.rafCount += 1;
     const elapsed = (time - this.lastTime) / 1000;
     this.lastTime = time;
-    if (this.playing) {
+    if (this.playing && this.clock) {
+      this.followClock();
+    } else if (this.playing) {
       this.accumulated += elapsed * this.meta.fps * this.speed;
       const step = Math.floor(this.accumulated);
       if (step > 0) {
@@ -180,6 +197,16 @@ export class Playback {
       this.renderer.render(this.scene, this.camera);
     }
     requestAnimationFrame((t) => this.tick(t));
+  }
+
+  followClock() {
+    const frame = Math.round(this.clock.frame());
+    if (this.loop && (frame > this.loop[1] || frame < this.loop[0])) {
+      this.clock.seek(this.loop[0]);
+      this.setFrame(this.loop[0]);
+    } else if (frame !== this.frame) {
+      this.setFrame(frame);
+    }
   }
 
   nextFrame(step) {
