@@ -6,6 +6,8 @@ Chromium missing is an error, not a skip: run tests/e2e/ensure_programs.sh (CI d
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -68,9 +70,26 @@ def demo(transactional_db, eager_celery, settings):
     call_command("load_demo")
 
 
-def log_in(page, base_url: str, username: str = "demo-therapist") -> None:
+def log_in(
+    page, base_url: str, username: str = "demo-therapist", password: str | None = None
+) -> None:
+    """Sign in through the login form (the demo accounts' password by default)."""
     page.goto(f"{base_url}/accounts/login/")
     page.fill("#id_username", username)
-    page.fill("#id_password", f"{username}-pw")
+    page.fill("#id_password", password or f"{username}-pw")
     page.click("button[type=submit]")
     page.wait_for_url(lambda url: "/accounts/login" not in url)
+
+
+@contextmanager
+def signed_in_page(browser, base_url: str, username: str, password: str) -> Iterator:
+    """A page of its own browser context (1280 × 1000, 60 s timeouts) signed in as ``username``;
+    the context is closed afterwards."""
+    context = browser.new_context(viewport={"width": 1280, "height": 1000})
+    page = context.new_page()
+    page.set_default_timeout(60_000)
+    try:
+        log_in(page, base_url, username, password)
+        yield page
+    finally:
+        context.close()

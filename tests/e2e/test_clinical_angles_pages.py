@@ -28,6 +28,8 @@ from analysis.bvh import read
 from analysis.clinical import ANGLE_NAMES, angle_ranges, angle_series
 from analysis.pipeline.clinical_stage import repetition_angles, rounded, workspace_summaries
 from analysis.pipeline.results import AnalysisSummary, RepetitionResult
+from tests.e2e.conftest import log_in
+from tests.personas import PASSWORD
 
 pytestmark = pytest.mark.e2e
 ROOT = Path(__file__).resolve().parents[2]
@@ -107,13 +109,7 @@ def clinic(transactional_db, eager_celery, settings, tmp_path):
 
 
 def sign_in(page, base_url: str) -> None:
-    from tests.personas import PASSWORD
-
-    page.goto(f"{base_url}/accounts/login/")
-    page.fill("#id_username", "therapist")
-    page.fill("#id_password", PASSWORD)
-    page.click("button[type=submit]")
-    page.wait_for_url(lambda url: "/accounts/login" not in url)
+    log_in(page, base_url, "therapist", PASSWORD)
 
 
 def shoot(page, selector: str, name: str, tmp_path: Path) -> Path:

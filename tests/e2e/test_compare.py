@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from django.core.files.base import ContentFile
 
+from tests.e2e.conftest import log_in as sign_in
 from tests.personas import PASSWORD, make_exercise, make_recording, make_world
 from webapp.recordings.models import Recording, RunStatus
 
@@ -96,11 +97,7 @@ def two_sessions(transactional_db, settings, tmp_path):
 
 
 def log_in(page, base_url: str) -> None:
-    page.goto(f"{base_url}/accounts/login/")
-    page.fill("#id_username", "therapist")
-    page.fill("#id_password", PASSWORD)
-    page.click("button[type=submit]")
-    page.wait_for_url(lambda url: "/accounts/login" not in url)
+    sign_in(page, base_url, "therapist", PASSWORD)
 
 
 def seconds(page, side: str) -> float:

@@ -19,6 +19,7 @@ from analysis.bvh import read
 from bench.bench_live import ROOT, free_port, server_env, setup_world, start_server, stop_server
 from capture.remote import run_remote
 from capture.sources import Source, header_text, paced
+from tests.e2e.conftest import log_in
 from tests.personas import FIXTURES, PASSWORD
 
 pytestmark = pytest.mark.e2e
@@ -69,11 +70,7 @@ def test_start_on_the_patient_page_then_see_it_under_way_and_watch_it(server, br
     page = context.new_page()
     page.set_default_timeout(60_000)
     try:
-        page.goto(f"{base}/accounts/login/")
-        page.fill("#id_username", "therapist")
-        page.fill("#id_password", PASSWORD)
-        page.click("button[type=submit]")
-        page.wait_for_url(lambda url: "/accounts/login" not in url)
+        log_in(page, base, "therapist", PASSWORD)
 
         page.goto(f"{base}/patients/{world['patient']}/")
         page.select_option("#live-exercise", world["exercise"])

@@ -28,6 +28,7 @@ from bench.bench_live import (
 )
 from capture.remote import stream_to
 from capture.sources import Source, header_text, paced
+from tests.e2e.conftest import log_in
 from tests.personas import FIXTURES, PASSWORD, fixture_landmarks
 
 pytestmark = pytest.mark.e2e
@@ -75,11 +76,7 @@ def test_streamed_session_counts_on_the_live_page(server, browser):
     page = context.new_page()
     page.set_default_timeout(60_000)
     try:
-        page.goto(f"{base}/accounts/login/")
-        page.fill("#id_username", "therapist")
-        page.fill("#id_password", PASSWORD)
-        page.click("button[type=submit]")
-        page.wait_for_url(lambda url: "/accounts/login" not in url)
+        log_in(page, base, "therapist", PASSWORD)
         session_id = path.rstrip("/").split("/")[-1]
         page.goto(f"{base}/live/{session_id}/")
         assert "Waiting for frames" in page.inner_text("#live-state")

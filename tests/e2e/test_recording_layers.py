@@ -8,6 +8,7 @@ from __future__ import annotations
 import pytest
 from django.core.files.base import ContentFile
 
+from tests.e2e.conftest import log_in as sign_in
 from tests.personas import PASSWORD, make_exercise, make_recording, make_world
 from tests.webapp.test_reports import npz
 from webapp.recordings.models import RunStatus
@@ -46,11 +47,7 @@ def analysed_recording(transactional_db, settings, tmp_path):
 
 
 def log_in(page, base_url: str) -> None:
-    page.goto(f"{base_url}/accounts/login/")
-    page.fill("#id_username", "therapist")
-    page.fill("#id_password", PASSWORD)
-    page.click("button[type=submit]")
-    page.wait_for_url(lambda url: "/accounts/login" not in url)
+    sign_in(page, base_url, "therapist", PASSWORD)
 
 
 def test_layers_toggle_and_guidance_markers(page, live_server, analysed_recording):

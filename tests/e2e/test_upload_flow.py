@@ -22,6 +22,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import Error as PlaywrightError
 
+from tests.e2e.conftest import signed_in_page
 from tests.local_server import LocalServer
 from tests.personas import PASSWORD
 
@@ -53,16 +54,8 @@ def site(tmp_path_factory):
 
 @pytest.fixture
 def user_page(browser, site):
-    context = browser.new_context(viewport={"width": 1280, "height": 1000})
-    page = context.new_page()
-    page.set_default_timeout(60_000)
-    page.goto(f"{site.url}/accounts/login/")
-    page.fill("#id_username", "uploader")
-    page.fill("#id_password", PASSWORD)
-    page.click("button[type=submit]")
-    page.wait_for_url(lambda url: "/accounts/login" not in url)
-    yield page
-    context.close()
+    with signed_in_page(browser, site.url, "uploader", PASSWORD) as page:
+        yield page
 
 
 def submit_upload(page, url: str, path: Path, exercise: str = "", **fields: str) -> float:

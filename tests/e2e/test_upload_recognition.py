@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.e2e.conftest import signed_in_page
 from tests.e2e.test_upload_flow import watch_until_succeeded
 from tests.local_server import LocalServer
 from tests.personas import PASSWORD
@@ -48,16 +49,8 @@ def site(tmp_path_factory):
 
 @pytest.fixture
 def patient_page(browser, site):
-    context = browser.new_context(viewport={"width": 1280, "height": 1000})
-    page = context.new_page()
-    page.set_default_timeout(60_000)
-    page.goto(f"{site.url}/accounts/login/")
-    page.fill("#id_username", "recogniser")
-    page.fill("#id_password", PASSWORD)
-    page.click("button[type=submit]")
-    page.wait_for_url(lambda url: "/accounts/login" not in url)
-    yield page
-    context.close()
+    with signed_in_page(browser, site.url, "recogniser", PASSWORD) as page:
+        yield page
 
 
 def option_texts(page, selector: str) -> list[str]:
