@@ -24,6 +24,7 @@ from pathlib import Path
 
 from analysis.bvh import AnalysisInputError, BVHError
 from analysis.bvh.io import Motion
+from analysis.landmarks import KeyPoses
 from analysis.pipeline.match import Candidate, MatchContext, features_of
 from analysis.pipeline.model import ModelVersionError, build_model, dump_model, load_model
 from analysis.pipeline.model_fit import TrainingRecording
@@ -60,9 +61,11 @@ def _training(spec: str) -> TrainingRecording:
     path, frames, types, label = parts
     if label not in LABELS:
         raise UsageError(f"the label must be one of {', '.join(LABELS)}, got {label!r}")
-    return TrainingRecording(
-        read(path), tuple(_ints(frames, "frames")), tuple(_ints(types, "types")), label
-    )
+    marked, typed = _ints(frames, "frames"), _ints(types, "types")
+    if len(marked) != len(typed):
+        raise UsageError(f"--train gives {len(marked)} key-pose frames but {len(typed)} types")
+    key_poses = KeyPoses.of(marked, typed)
+    return TrainingRecording(read(path), key_poses, label)
 
 
 def build(args: argparse.Namespace) -> int:

@@ -29,6 +29,7 @@ from sklearn.metrics import roc_auc_score
 from analysis.assessment.scoring import repetition_distance
 from analysis.bvh import Motion, read
 from analysis.kinematics import flatten, scaled_positions
+from analysis.landmarks import KeyPoses
 from analysis.pipeline import TrainingRecording, analyse, build_model
 
 SUBJECTS = [f"s{k:02d}" for k in range(2, 8)]
@@ -92,7 +93,7 @@ def load_sessions(data: Path, exercise: str) -> tuple[Session, list[Session]]:
 def training_items(sessions: list[Session], exclude: str) -> list[TrainingRecording]:
     return [
         TrainingRecording(
-            s.motion, tuple(s.landmark_frames), tuple(s.landmark_types),
+            s.motion, KeyPoses.of(s.landmark_frames, s.landmark_types),
             "correct" if s.correct else "incorrect",
         )
         for s in sessions if s.subject != exclude

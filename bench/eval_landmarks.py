@@ -45,7 +45,8 @@ from analysis.landmarks.identification import (
     periodic_landmarks,
     tutor_cycle,
 )
-from analysis.landmarks.refining import Candidates, Clustering, Selection, refine
+from analysis.landmarks.key_poses import KeyPoses
+from analysis.landmarks.refining import Clustering, Selection, refine
 from analysis.landmarks.regularise import GrammarOptions
 from analysis.landmarks.repetitions import repetitions
 from analysis.landmarks.signature import MotionSignature
@@ -144,16 +145,16 @@ class Outcome:
     seconds: float
 
 
-def _score(s: Session, c: Candidates) -> Confusion:
+def _score(s: Session, c: KeyPoses) -> Confusion:
     return confusion(c.frames, c.types, s.types, s.intervals, s.motion.n_frames)
 
 
-def periodic_clean(c: Candidates, patterns: list[list[int]]) -> Candidates:
+def periodic_clean(c: KeyPoses, patterns: list[list[int]]) -> KeyPoses:
     """Chapter 6 (analysis.periodic.clean, GA^K): drop out-of-sequence landmarks."""
     return periodic_landmarks(c, patterns, method="ga-k", seed=0)
 
 
-def count_repetitions(c: Candidates, cycle: list[int], n_frames: int) -> int:
+def count_repetitions(c: KeyPoses, cycle: list[int], n_frames: int) -> int:
     """Repetitions in a landmark sequence (analysis.repetitions, every one it returns)."""
     return len(repetitions(c.frames.tolist(), c.types.tolist(), cycle, last_frame=n_frames - 1))
 
@@ -189,13 +190,13 @@ def run_config(
     return outcomes
 
 
-def dtw_transfer(tutor: Session, motion: Motion, joints: tuple[int, ...]) -> Candidates:
+def dtw_transfer(tutor: Session, motion: Motion, joints: tuple[int, ...]) -> KeyPoses:
     """Table 5.8's DTW: each tutor landmark goes to the mean performance frame matched to it."""
     x = normalised_positions(tutor.motion)[:, list(joints)].reshape(tutor.motion.n_frames, -1)
     y = normalised_positions(motion)[:, list(joints)].reshape(motion.n_frames, -1)
     path = np.asarray(align(x, y, DTWOptions()).path)
     frames = np.array([round(path[path[:, 0] == f, 1].mean()) for f in tutor.frames])
-    return Candidates(frames.astype(np.int64), tutor.types.astype(np.int64))
+    return KeyPoses(frames.astype(np.int64), tutor.types.astype(np.int64))
 
 
 def run_dtw(data: dict[str, list[Session]], subjects: tuple[str, ...]) -> list[Outcome]:

@@ -22,6 +22,7 @@ from django.db.models import Max, Q
 from django.utils import timezone
 
 from analysis.assessment.scoring import PASS_SCORE
+from analysis.landmarks import KeyPoses
 from analysis.online import BayesThreshold
 from analysis.pipeline import TrainingRecording
 from analysis.sources import read_recording
@@ -81,7 +82,7 @@ def training_recording(run: AnalysisRun) -> TrainingRecording:
         marks = run.result.landmarks if run.result else ()
         frames, types = [m.frame for m in marks], [m.type for m in marks]
     motion = read_recording(run.recording.file.name, read_verified(run.recording)).motion
-    return TrainingRecording(motion, tuple(frames), tuple(types), run_label(run))
+    return TrainingRecording(motion, KeyPoses.of(frames, types), run_label(run))
 
 
 def training_recordings(exercise: Exercise) -> list[TrainingRecording]:

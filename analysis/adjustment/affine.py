@@ -25,7 +25,7 @@ Public API:
 - ``gamma_vector(gamma: Mapping[str, float], names, default=0.0) -> (J,)`` — γ per joint by name.
 - ``frame_jumps(local_q) -> (F − 1, J)`` degrees between consecutive frames (for checks);
   ``channel_orders(skeleton)`` the Euler order of every joint for ``method="euler"``.
-- ``Performance`` (local rotations, translations, landmarks of one take) and
+- ``Performance`` (local rotations, translations, key poses of one take) and
   ``demonstration_skeletons(skeleton, patient, tutor, mean_poses, gamma) -> Demonstration``: world
   positions (F_patient, J, 3) of the patient; the patient adjusted by γ toward the tutor's mean pose
   of each landmark's type; the tutor synchronised to the patient (``analysis.sync``); and that
@@ -51,6 +51,7 @@ from analysis.adjustment.sync import (
 from analysis.bvh import Motion, Skeleton
 from analysis.kinematics import forward, rotations, translations
 from analysis.kinematics import quaternions as quat
+from analysis.landmarks import KeyPoses
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -251,21 +252,15 @@ def adjust(
 
 @dataclass(frozen=True, eq=False)
 class Performance:
-    """One take: local rotations (F, J, 4), translations (F, J, 3), landmark frames/types (L,)."""
+    """One take: local rotations (F, J, 4), translations (F, J, 3) and its key poses."""
 
     local_q: FloatArray
     local_t: FloatArray
-    landmark_frames: IntArray
-    landmark_types: IntArray
+    key_poses: KeyPoses
 
     @classmethod
-    def from_motion(
-        cls, motion: Motion, frames: Sequence[int], types: Sequence[int]
-    ) -> Performance:
-        return cls(
-            rotations(motion), translations(motion),
-            np.asarray(frames, dtype=np.int64), np.asarray(types, dtype=np.int64),
-        )  # fmt: skip
+    def from_motion(cls, motion: Motion, key_poses: KeyPoses) -> Performance:
+        return cls(rotations(motion), translations(motion), key_poses)
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,11 +280,12 @@ def _toward_mean_poses(
     p: Performance, mean_poses: Mapping[int, FloatArray]
 ) -> tuple[IntArray, FloatArray]:
     """The patient's landmarks whose type has a tutor mean pose, and those poses (L, J, 4)."""
-    keep = np.array([int(t) in mean_poses for t in p.landmark_types], dtype=bool)
-    frames = p.landmark_frames[keep]
+    types = p.key_poses.types
+    keep = np.array([int(t) in mean_poses for t in types], dtype=bool)
+    frames = p.key_poses.frames[keep]
     if not frames.size:
         return frames, np.zeros((0, *p.local_q.shape[1:]))
-    return frames, np.stack([mean_poses[int(t)] for t in p.landmark_types[keep]])
+    return frames, np.stack([mean_poses[int(t)] for t in types[keep]])
 
 
 def _synchronised_tutor(
@@ -298,12 +294,12 @@ def _synchronised_tutor(
     """The tutor on the patient's timeline: rotations, translations, frame map and pairs."""
     if tutor_root not in ("own", "patient"):
         raise ValueError(f"tutor_root must be 'own' or 'patient', got {tutor_root!r}")
-    pairs = synchronise_landmarks(patient.landmark_types, tutor.landmark_types)
+    ours, theirs = patient.key_poses, tutor.key_poses
+    pairs = synchronise_landmarks(ours.types, theirs.types)
     if pairs:
         fmap = tutor_frame_map(
-            pairs, patient.landmark_frames, tutor.landmark_frames, len(patient.local_q),
-            tutor_types=tutor.landmark_types,
-        )  # fmt: skip
+            pairs, ours.frames, theirs.frames, len(patient.local_q), tutor_types=theirs.types
+        )
     else:  # no key pose to pair (none found, or none of the tutor's types): the tutor's own pace
         fmap = np.arange(len(patient.local_q), dtype=np.float64) % len(tutor.local_q)
     tutor_t = sample_linear(tutor.local_t, fmap)
@@ -335,7 +331,7 @@ def demonstration_skeletons(
     frames, targets = _toward_mean_poses(patient, mean_poses)
     patient_adj = adjust(patient.local_q, frames, targets, gamma, method, order=orders)
     tutor_q, tutor_t, fmap, pairs = _synchronised_tutor(skeleton, patient, tutor, tutor_root)
-    lm = patient.landmark_frames
+    lm = patient.key_poses.frames
     tutor_g = gamma if tutor_gamma is None else tutor_gamma
     tutor_adj = adjust(tutor_q, lm, patient.local_q[lm], tutor_g, method, order=orders)
     if patient_world is None:

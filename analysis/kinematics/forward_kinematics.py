@@ -10,8 +10,6 @@ that write 6 channels on every joint expect); other axes keep the OFFSET. Quater
 
 from __future__ import annotations
 
-import weakref
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -76,27 +74,9 @@ def _euler_quaternions(
     return out
 
 
-# A pipeline run asks for the same motion's rotations and positions in several stages; a Motion
-# is immutable, so each is computed once per motion and handed out as a fresh copy (callers may
-# edit what they get).
-_MEMO: weakref.WeakKeyDictionary[Motion, dict[str, FloatArray]] = weakref.WeakKeyDictionary()
-
-
-def _memoised(motion: Motion, key: str, compute: Callable[[Motion], FloatArray]) -> FloatArray:
-    return _shared(motion, key, compute).copy()
-
-
-def _shared(motion: Motion, key: str, compute: Callable[[Motion], FloatArray]) -> FloatArray:
-    """The memoised array itself, for this module's readers that never write into it."""
-    cached = _MEMO.setdefault(motion, {})
-    if key not in cached:
-        cached[key] = compute(motion)
-    return cached[key]
-
-
 def rotations(motion: Motion) -> FloatArray:
     """Local joint rotations relative to the parent: (F, J, 4) unit quaternions (w, x, y, z)."""
-    return _memoised(motion, "rotations", _rotations)
+    return _rotations(motion)
 
 
 def _rotations(motion: Motion) -> FloatArray:
@@ -226,7 +206,7 @@ def _translation_columns(skeleton: Skeleton) -> npt.NDArray[np.int64]:
 
 def positions(motion: Motion) -> FloatArray:
     """World positions of every joint: (F, J, 3), same units as the file."""
-    return _memoised(motion, "positions", _positions)
+    return _positions(motion)
 
 
 def _positions(motion: Motion) -> FloatArray:
@@ -321,7 +301,9 @@ def root_relative(points: FloatArray) -> FloatArray:
 
 def heading_angles(motion: Motion) -> FloatArray:
     """The root's heading (rotation about the vertical axis) per frame, radians: (F,)."""
-    root = _shared(motion, "rotations", _rotations)[:, 0]
+    columns, axes = _rotation_layout(motion.skeleton)
+    frames = np.ascontiguousarray(motion.frames)
+    root = _euler_quaternions(frames, columns[:1], axes[:1])[:, 0]  # the root's alone: 1/J the work
     return quat.twist_angle(root, "XYZ"[UP_AXIS])
 
 
@@ -339,8 +321,7 @@ def normalised_positions(motion: Motion, per_frame: bool = False) -> FloatArray:
     By default one heading per recording (the circular mean over frames) is removed, so turning of
     the trunk during the exercise is kept; ``per_frame`` removes each frame's own heading.
     """
-    points = _shared(motion, "positions", _positions)  # read only: a new array is returned
-    return heading_facing(points, heading_angles(motion), per_frame)
+    return heading_facing(_positions(motion), heading_angles(motion), per_frame)
 
 
 def heading_facing(points: FloatArray, heading: FloatArray, per_frame: bool = False) -> FloatArray:

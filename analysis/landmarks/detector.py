@@ -32,9 +32,7 @@ from sklearn.svm import SVC
 from sklearn.tree import DecisionTreeClassifier
 
 from analysis.landmarks.features import frame_features
-from analysis.landmarks.refining import (
-    Candidates,
-)
+from analysis.landmarks.key_poses import KeyPoses
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -154,7 +152,7 @@ class LandmarkDetector(ClassifierMixin, BaseEstimator):
 
     ``fit(signatures, landmark_frames, landmark_types)``: lists of (F_i, k) signatures, their
     ground-truth landmark frames and types (ints ≥ 1). ``predict(signature)`` → (F,) types with 0
-    for *none*; ``candidates(signature)`` → `Candidates`. Learnt: ``classifier_``, ``classes_``.
+    for *none*; ``candidates(signature)`` → `KeyPoses`. Learnt: ``classifier_``, ``classes_``.
     extra_features: also give the classifier the signature values at the frame (the pose), an
     addition to the thesis's features; ends: count the recording's first and last frames as
     extrema instead of leaving their features unknown, strict: nearest extrema strictly before and
@@ -218,8 +216,8 @@ class LandmarkDetector(ClassifierMixin, BaseEstimator):
         """Per-frame class probabilities (F, len(classes_)), columns in ``classes_`` order."""
         return np.asarray(self.classifier_.predict_proba(self.features(signature)))
 
-    def candidates(self, signature: FloatArray) -> Candidates:
+    def candidates(self, signature: FloatArray) -> KeyPoses:
         """Eq 5.23: the frames classified as a landmark type, with their types."""
         labels = self.predict(signature)
         frames = np.flatnonzero(labels != NONE).astype(np.int64)
-        return Candidates(frames, labels[frames])
+        return KeyPoses(frames, labels[frames])

@@ -24,8 +24,10 @@ import numpy.typing as npt
 from sklearn.base import BaseEstimator
 
 from analysis.bvh import Motion
+from analysis.kinematics import Kinematics, kinematics
 from analysis.landmarks.detector import ClassifierName, LandmarkDetector
-from analysis.landmarks.refining import Candidates, RefineOptions, mean_poses, refine
+from analysis.landmarks.key_poses import KeyPoses
+from analysis.landmarks.refining import RefineOptions, mean_poses, refine
 from analysis.landmarks.regularise import (
     GrammarOptions,
     farthest_types,
@@ -99,7 +101,7 @@ class Identified:
     """The classifier's candidate landmarks (eq 5.23) of one performance, with its signature
     (F, k) and whether it was read mirrored (left↔right)."""
 
-    candidates: Candidates
+    candidates: KeyPoses
     signature: FloatArray
     mirrored: bool
 
@@ -111,13 +113,13 @@ class LandmarkResult:
     relocation: what periodic sequence analysis receives), ``signature`` (F, k), ``mirrored``,
     ``regularised`` (after grammar typing only)."""
 
-    candidates: Candidates
-    refined: Candidates
-    landmarks: Candidates
+    candidates: KeyPoses
+    refined: KeyPoses
+    landmarks: KeyPoses
     signature: FloatArray
     mirrored: bool
     # after grammar typing, before relocation (same landmarks as ``landmarks``, index by index)
-    regularised: Candidates | None = None
+    regularised: KeyPoses | None = None
 
 
 def _checked(
@@ -172,21 +174,17 @@ class LandmarkModel(BaseEstimator):
         self.options = options
 
     def _samples(
-        self, tutor: Labelled, training: Sequence[Labelled]
+        self, labelled: Sequence[Labelled], kins: Sequence[Kinematics], augment: int
     ) -> list[tuple[FloatArray, IntArray, IntArray]]:
         sig = self.signature_
-        labelled = [tutor, *training]
         out = [
-            (sig.transform(m), np.asarray(f, np.int64), np.asarray(t, np.int64))
-            for m, f, t in labelled
+            (sig.transform(m, kin), np.asarray(f, np.int64), np.asarray(t, np.int64))
+            for (m, f, t), kin in zip(labelled, kins, strict=True)
         ]
-        if not training and self.options.augment:
+        if augment:
+            tutor, frames, types = labelled[0]
             copies = augmented_copies(
-                sig.smoothed(tutor[0], False),
-                tutor[1],
-                tutor[2],
-                self.options.augment,
-                self.options.seed,
+                sig.smoothed(tutor, False, kins[0]), frames, types, augment, self.options.seed
             )
             out += [(sig.project(c), f, t) for c, f, t in copies]
         return out
@@ -201,8 +199,10 @@ class LandmarkModel(BaseEstimator):
         """Learn from the tutor (and labelled recordings); raises ValueError on bad landmarks."""
         frames, types = _checked(tutor, frames, types)
         labelled = [(tutor, frames, types), *((m, *_checked(m, f, t)) for m, f, t in training)]
-        self.signature_ = MotionSignature(options=self.options.signature).fit(tutor)
-        samples = self._samples(labelled[0], labelled[1:])
+        kins = [kinematics(m) for m, _, _ in labelled]  # one pass per recording for every use
+        self.signature_ = MotionSignature(options=self.options.signature).fit(tutor, kin=kins[0])
+        augment = 0 if training else self.options.augment
+        samples = self._samples(labelled, kins, augment)
         self.detector_ = _detector(self.options).fit(*zip(*samples, strict=True))
         self.means_ = mean_poses(samples[0][0], frames, types)
         self.cycle_ = tutor_cycle(types)
@@ -212,27 +212,38 @@ class LandmarkModel(BaseEstimator):
         self.gaps_ = typical_gaps([(f, t) for _, f, t in labelled], n_types)
         self.extreme_types_ = set()
         if self.options.relocate:
-            poses = [(pose_series(m), np.asarray(f), np.asarray(t)) for m, f, t in labelled]
+            poses = [
+                (pose_series(m, kin=kin), np.asarray(f), np.asarray(t))
+                for (m, f, t), kin in zip(labelled, kins, strict=True)
+            ]
             self.extreme_types_ = farthest_types(poses)
         return self
 
-    def detect(self, motion: Motion) -> LandmarkResult:
-        """Candidate, refined and final landmarks of one performance (same fps as the tutor)."""
+    def detect(self, motion: Motion, kin: Kinematics | None = None) -> LandmarkResult:
+        """Candidate, refined and final landmarks of one performance (same fps as the tutor);
+        ``kin``: the motion's `kinematics` when already computed."""
+        kin = kinematics(motion) if kin is None else kin
+        data = self.signature_.read(motion, kin)
+        names = motion.skeleton.names
         if not self.signature_.options.mirror:
-            return self._detect_side(motion, False)
+            return self._detect_side(motion, kin, data, False)
         if self.options.side == "landmarks":
-            sides = [self._detect_side(motion, m) for m in (False, True)]
+            sides = [self._detect_side(motion, kin, data, m) for m in (False, True)]
             return min(sides, key=self._misfit)
-        return self._detect_side(motion, self.signature_.mirrored(motion))
+        return self._detect_side(motion, kin, data, self.signature_.mirrored_data(data, names))
 
-    def identify(self, motion: Motion) -> Identified:
+    def identify(self, motion: Motion, kin: Kinematics | None = None) -> Identified:
         """Section 5.4 alone: the signature and the classifier's candidate landmarks (the side
         is chosen by the tutor eigenspace's variance, as `detect` does by default)."""
-        mirrored = bool(self.signature_.options.mirror and self.signature_.mirrored(motion))
-        sig = self.signature_.project(self.signature_.smoothed(motion, mirrored))
+        signature, names = self.signature_, motion.skeleton.names
+        data = signature.read(motion, kin)
+        mirrored = bool(signature.options.mirror and signature.mirrored_data(data, names))
+        sig = signature.project(signature.smoothed_data(data, names, mirrored))
         return Identified(self.detector_.candidates(sig), sig, mirrored)
 
-    def refine_identified(self, identified: Identified, motion: Motion) -> LandmarkResult:
+    def refine_identified(
+        self, identified: Identified, motion: Motion, kin: Kinematics | None = None
+    ) -> LandmarkResult:
         """Section 5.5 and our grammar typing and relocation on `identify`'s candidates."""
         sig, candidates = identified.signature, identified.candidates
         refined = refine(candidates, sig, self.means_, self.options.refine)
@@ -243,7 +254,7 @@ class LandmarkModel(BaseEstimator):
             )
         regularised = final
         if self.extreme_types_:
-            final = relocate(final, pose_series(motion), self.extreme_types_)
+            final = relocate(final, pose_series(motion, kin=kin), self.extreme_types_)
         return LandmarkResult(candidates, refined, final, sig, identified.mirrored, regularised)
 
     def _misfit(self, result: LandmarkResult) -> float:
@@ -256,15 +267,18 @@ class LandmarkModel(BaseEstimator):
         distances = pose_distances(result.signature, self.means_, width)
         return float(np.mean(distances[found.frames, found.types]))
 
-    def _detect_side(self, motion: Motion, mirrored: bool) -> LandmarkResult:
-        sig = self.signature_.project(self.signature_.smoothed(motion, mirrored))
+    def _detect_side(
+        self, motion: Motion, kin: Kinematics, data: FloatArray, mirrored: bool
+    ) -> LandmarkResult:
+        signature = self.signature_
+        sig = signature.project(signature.smoothed_data(data, motion.skeleton.names, mirrored))
         identified = Identified(self.detector_.candidates(sig), sig, bool(mirrored))
-        return self.refine_identified(identified, motion)
+        return self.refine_identified(identified, motion, kin)
 
 
 def periodic_landmarks(
-    landmarks: Candidates, patterns: Sequence[Sequence[int]], method: str = "ga-k", seed: int = 0
-) -> Candidates:
+    landmarks: KeyPoses, patterns: Sequence[Sequence[int]], method: str = "ga-k", seed: int = 0
+) -> KeyPoses:
     """Chapter 6 on detected landmarks: keep the members `analysis.periodic.clean` keeps.
 
     patterns: training periods (``LandmarkModel.patterns_``, e.g. [[1, 2, 1]]); method: one of
@@ -275,7 +289,7 @@ def periodic_landmarks(
     kept = np.asarray(
         clean([int(t) for t in landmarks.types], patterns, method=method, seed=seed), np.int64
     )
-    return Candidates(landmarks.frames[kept], landmarks.types[kept])
+    return KeyPoses(landmarks.frames[kept], landmarks.types[kept])
 
 
 @dataclass(frozen=True)
@@ -285,7 +299,7 @@ class RepetitionResult:
     (`analysis.repetitions.Repetition`: start, end-of-range frames, end, complete, cycle)."""
 
     detection: LandmarkResult
-    landmarks: Candidates
+    landmarks: KeyPoses
     repetitions: list[Repetition]
 
 

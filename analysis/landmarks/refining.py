@@ -29,18 +29,12 @@ import numpy.typing as npt
 from sklearn.cluster import KMeans
 from sklearn.mixture import GaussianMixture
 
+from analysis.landmarks.key_poses import KeyPoses
+
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 Clustering = Literal["em", "kmeans", "tc", "gap"]
 Selection = Literal["mu1", "mu2", "extreme"]
-
-
-@dataclass(frozen=True)
-class Candidates:
-    """Landmarks as frames (n,) increasing and their types (n,) ≥ 1 (eq 5.23's χ, 5.27's χ̄)."""
-
-    frames: IntArray
-    types: IntArray
 
 
 @dataclass(frozen=True)
@@ -91,7 +85,7 @@ def gap_clusters(frames: npt.ArrayLike, beta: float) -> IntArray:
     return ids
 
 
-def _points(candidates: Candidates, signature: FloatArray) -> FloatArray:
+def _points(candidates: KeyPoses, signature: FloatArray) -> FloatArray:
     return np.column_stack([candidates.frames.astype(np.float64), signature[candidates.frames]])
 
 
@@ -117,7 +111,7 @@ def em_clusters(points: FloatArray, counts: list[int], seed: int) -> IntArray:
     return best[1]
 
 
-def cluster(candidates: Candidates, signature: FloatArray, options: RefineOptions) -> IntArray:
+def cluster(candidates: KeyPoses, signature: FloatArray, options: RefineOptions) -> IntArray:
     """Eq 5.28: a cluster label for every candidate (n,)."""
     frames = candidates.frames
     if frames.size == 0:
@@ -136,7 +130,7 @@ def cluster(candidates: Candidates, signature: FloatArray, options: RefineOption
 
 
 def _distances(
-    candidates: Candidates, signature: FloatArray, means: dict[int, FloatArray], types: IntArray
+    candidates: KeyPoses, signature: FloatArray, means: dict[int, FloatArray], types: IntArray
 ) -> FloatArray:
     """Euclidean distance of each candidate's signature to the tutor mean of the given type."""
     out = np.full(types.size, np.inf)
@@ -148,7 +142,7 @@ def _distances(
 
 
 def _extremeness(
-    candidates: Candidates, signature: FloatArray, means: dict[int, FloatArray]
+    candidates: KeyPoses, signature: FloatArray, means: dict[int, FloatArray]
 ) -> FloatArray:
     """Minus how far each candidate goes toward its type's tutor mean, away from the other types'
     means (projection on P̄_τ − mean of the other P̄): lower = more extreme. A patient whose range
@@ -166,12 +160,12 @@ def _extremeness(
 
 
 def select(
-    candidates: Candidates,
+    candidates: KeyPoses,
     labels: IntArray,
     signature: FloatArray,
     means: dict[int, FloatArray],
     selection: Selection,
-) -> Candidates:
+) -> KeyPoses:
     """Eqs 5.31 (μ1) and 5.32–5.33 (μ2): one landmark per cluster, sorted by frame.
 
     μ1: the member closest to the tutor's mean signature of the member's own type.
@@ -193,17 +187,17 @@ def select(
         frames.append(int(candidates.frames[best]))
         types.append(int(candidates.types[best]))
     order = np.argsort(frames, kind="stable")
-    return Candidates(
+    return KeyPoses(
         np.asarray(frames, dtype=np.int64)[order], np.asarray(types, dtype=np.int64)[order]
     )
 
 
 def refine(
-    candidates: Candidates,
+    candidates: KeyPoses,
     signature: FloatArray,
     means: dict[int, FloatArray],
     options: RefineOptions = RefineOptions(),
-) -> Candidates:
+) -> KeyPoses:
     """Eq 5.27: cluster the candidates and keep one per cluster.
 
     signature: (F, k) of the performance; means: the tutor's mean signature per type (eq 5.30,

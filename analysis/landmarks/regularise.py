@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from analysis.landmarks.refining import Candidates
+from analysis.landmarks.key_poses import KeyPoses
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -59,14 +59,14 @@ def farthest_types(
     return {t for t, h in hits.items() if np.mean(h) >= share}
 
 
-def relocate(landmarks: Candidates, poses: FloatArray, types: set[int]) -> Candidates:
+def relocate(landmarks: KeyPoses, poses: FloatArray, types: set[int]) -> KeyPoses:
     """Move every inner landmark of the given types to the farthest pose from its predecessor
     (between its neighbours); the others stay. Returns landmarks sorted by frame."""
     frames = landmarks.frames.copy()
     for k in range(1, frames.size - 1):
         if int(landmarks.types[k]) in types:
             frames[k] = farthest_frame(poses, int(frames[k - 1]), int(frames[k + 1]))
-    return Candidates(frames, landmarks.types.copy())
+    return KeyPoses(frames, landmarks.types.copy())
 
 
 @dataclass(frozen=True)
@@ -198,14 +198,14 @@ def _relax(lat: _Lattice, j: int, k: int) -> None:
 
 
 def regularise(
-    landmarks: Candidates,
+    landmarks: KeyPoses,
     signature: FloatArray,
     means: dict[int, FloatArray],
     allowed: npt.NDArray[np.bool_],
     options: GrammarOptions = GrammarOptions(),
     *,
     gaps: FloatArray | None = None,
-) -> Candidates:
+) -> KeyPoses:
     """Keep, (re)type and complete refined landmarks so consecutive types follow ``allowed``.
 
     Minimises, by dynamic programming over (landmark, type): Σ pose cost (`pose_costs`) +
@@ -231,9 +231,7 @@ def regularise(
     return _regularised(landmarks, best + options.delete * (n - 1 - np.arange(n))[:, None], back)
 
 
-def _regularised(
-    landmarks: Candidates, total: FloatArray, back: npt.NDArray[np.int64]
-) -> Candidates:
+def _regularised(landmarks: KeyPoses, total: FloatArray, back: npt.NDArray[np.int64]) -> KeyPoses:
     k, t = (int(v) for v in np.unravel_index(int(np.argmin(total)), total.shape))
     out: list[tuple[int, int]] = []
     while k >= 0:
@@ -243,6 +241,6 @@ def _regularised(
             out.append((frame, kind))
         k, t = j, src
     out.sort()
-    return Candidates(
+    return KeyPoses(
         np.array([f for f, _ in out], dtype=np.int64), np.array([t for _, t in out], dtype=np.int64)
     )

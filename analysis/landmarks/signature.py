@@ -20,8 +20,9 @@ from scipy.interpolate import CubicSpline
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from analysis.bvh import Motion
-from analysis.kinematics import normalised_positions, rotations
+from analysis.kinematics import Kinematics, kinematics
 from analysis.kinematics import quaternions as quat
+from analysis.kinematics.forward_kinematics import heading_facing
 
 FloatArray = npt.NDArray[np.float64]
 Source = Literal["positions", "quaternions"]
@@ -79,15 +80,43 @@ def mirror_index(names: tuple[str, ...]) -> npt.NDArray[np.int64]:
     return np.array([names.index(n) if n in names else k for k, n in enumerate(swapped)])
 
 
-def _continuous_rotations(motion: Motion) -> FloatArray:
-    """(F, J, 4) local rotations without sign jumps in time."""
-    q = rotations(motion)
+def motion_data(motion: Motion, source: Source, kin: Kinematics | None = None) -> FloatArray:
+    """The motion data of one source before any mirroring: (F, J, 3) root-relative positions
+    facing a common heading (cm) or (F, J, 4) local rotations without sign jumps in time.
+    ``kin``: the motion's `kinematics` when already computed (a pipeline run passes its own)."""
+    kin = kinematics(motion) if kin is None else kin
+    if source == "positions":
+        return heading_facing(kin.positions, kin.heading)
+    q = kin.local_q.copy()
     q[0] = quat.canonical(q[0])
     return quat.make_continuous(q, axis=0)
 
 
+def oriented(
+    data: FloatArray,
+    names: tuple[str, ...],
+    reference: FloatArray | None = None,
+    mirror: bool = False,
+) -> FloatArray:
+    """`motion_data` (positions or quaternions, told apart by the last axis) reflected left↔right
+    when ``mirror`` and, for quaternions, put in ``reference``'s hemisphere."""
+    quaternions = data.shape[-1] == 4
+    if mirror:
+        flip_axes = [1.0, 1.0, -1.0, -1.0] if quaternions else [-1.0, 1.0, 1.0]
+        data = data[:, mirror_index(names)] * flip_axes
+    if quaternions and reference is not None:
+        data = data if mirror else data.copy()  # the mirrored data is already a new array
+        flip = np.sum(data.mean(axis=0) * reference, axis=-1) < 0.0
+        data[:, flip] *= -1.0
+    return data
+
+
 def joint_series(
-    motion: Motion, source: Source, reference: FloatArray | None = None, mirror: bool = False
+    motion: Motion,
+    source: Source,
+    reference: FloatArray | None = None,
+    mirror: bool = False,
+    kin: Kinematics | None = None,
 ) -> FloatArray:
     """Per-joint motion data of one source: (F, J, 3) positions in cm or (F, J, 4) quaternions.
 
@@ -96,16 +125,7 @@ def joint_series(
     mirror: the performance reflected left↔right (x is lateral after heading normalisation): left
     and right joints swap, x positions change sign, rotations (w, x, y, z) become (w, x, −y, −z).
     """
-    if source == "positions":
-        data = normalised_positions(motion)
-        return data[:, mirror_index(motion.skeleton.names)] * [-1.0, 1.0, 1.0] if mirror else data
-    q = _continuous_rotations(motion)
-    if mirror:
-        q = q[:, mirror_index(motion.skeleton.names)] * [1.0, 1.0, -1.0, -1.0]
-    if reference is not None:
-        flip = np.sum(q.mean(axis=0) * reference, axis=-1) < 0.0
-        q[:, flip] *= -1.0
-    return q
+    return oriented(motion_data(motion, source, kin), motion.skeleton.names, reference, mirror)
 
 
 def moving_joints(series: FloatArray, n_joints: int) -> tuple[int, ...]:
@@ -150,18 +170,27 @@ class MotionSignature(TransformerMixin, BaseEstimator):
     def __init__(self, *, options: SignatureOptions = SignatureOptions()) -> None:
         self.options = options
 
-    def smoothed(self, motion: Motion, mirror: bool | None = None) -> FloatArray:
+    def read(self, motion: Motion, kin: Kinematics | None = None) -> FloatArray:
+        """The options' source of motion data (`motion_data`), read once per performance."""
+        return motion_data(motion, self.options.source, kin)
+
+    def smoothed(
+        self, motion: Motion, mirror: bool | None = None, kin: Kinematics | None = None
+    ) -> FloatArray:
         """The smoothed motion data C of the involved joints (eq 5.1): (F, p).
 
         mirror: None = the side `mirrored` chooses when the options allow mirroring, else as given.
         """
-        if mirror is None:
-            mirror = self.options.mirror and self.mirrored(motion)
-        return self._smoothed(motion, mirror)
+        return self.smoothed_data(self.read(motion, kin), motion.skeleton.names, mirror)
 
-    def _smoothed(self, motion: Motion, mirror: bool) -> FloatArray:
-        series = joint_series(motion, self.options.source, self.reference_, mirror)
-        flat = series[:, list(self.joints_)].reshape(motion.n_frames, -1)
+    def smoothed_data(
+        self, data: FloatArray, names: tuple[str, ...], mirror: bool | None = None
+    ) -> FloatArray:
+        """`smoothed` from already read motion data (`read`) and the performance's joint names."""
+        if mirror is None:
+            mirror = self.options.mirror and self.mirrored_data(data, names)
+        series = oriented(data, names, self.reference_, mirror)
+        flat = series[:, list(self.joints_)].reshape(data.shape[0], -1)
         return smooth(flat, self.window_frames_)
 
     def captured(self, smoothed: FloatArray) -> float:
@@ -170,16 +199,22 @@ class MotionSignature(TransformerMixin, BaseEstimator):
         inside = (smoothed - smoothed.mean(axis=0)) @ self.loadings_
         return float(np.mean(np.sum(inside**2, axis=1)))
 
-    def mirrored(self, motion: Motion) -> bool:
+    def mirrored(self, motion: Motion, kin: Kinematics | None = None) -> bool:
         """Whether the left↔right reflection of it fits the tutor's eigenspace better."""
-        straight = self.captured(self._smoothed(motion, False))
-        return self.captured(self._smoothed(motion, True)) > straight
+        return self.mirrored_data(self.read(motion, kin), motion.skeleton.names)
 
-    def fit(self, tutor: Motion, y: object = None) -> MotionSignature:
+    def mirrored_data(self, data: FloatArray, names: tuple[str, ...]) -> bool:
+        """`mirrored` from already read motion data."""
+        straight = self.captured(self.smoothed_data(data, names, False))
+        return self.captured(self.smoothed_data(data, names, True)) > straight
+
+    def fit(
+        self, tutor: Motion, y: object = None, kin: Kinematics | None = None
+    ) -> MotionSignature:
         """Learn the joints, means and loadings from the tutor's smoothed motion data."""
         opts = self.options
         self.reference_ = None
-        series = joint_series(tutor, opts.source)
+        series = self.read(tutor, kin)
         if opts.source == "quaternions":
             self.reference_ = series.mean(axis=0)
         names = tutor.skeleton.names
@@ -189,16 +224,16 @@ class MotionSignature(TransformerMixin, BaseEstimator):
             else moving_joints(series, opts.n_joints)
         )
         self.window_frames_ = opts.window * tutor.fps
-        data = self._smoothed(tutor, False)
+        data = self.smoothed_data(series, tutor.skeleton.names, False)
         self.means_, loadings, self.explained_ = pca_loadings(data)
         k = n_components_for(self.explained_, opts.variance)
         self.loadings_ = loadings[:, :k]
         self.scale_ = np.sqrt(np.maximum(self.explained_[:k], 1e-12))
         return self
 
-    def transform(self, motion: Motion) -> FloatArray:
+    def transform(self, motion: Motion, kin: Kinematics | None = None) -> FloatArray:
         """The signature sig of a performance: (F, Δ_k) standardised PC scores."""
-        return self.project(self.smoothed(motion))
+        return self.project(self.smoothed(motion, kin=kin))
 
     def project(self, smoothed: FloatArray) -> FloatArray:
         """Eq 5.5 on already smoothed data (F, p): (C − tutor means)·V_k, then standardised."""
@@ -211,10 +246,10 @@ class MotionSignature(TransformerMixin, BaseEstimator):
         return np.asarray(scores)
 
 
-def pose_series(motion: Motion, window: float = 0.15) -> FloatArray:
+def pose_series(motion: Motion, window: float = 0.15, kin: Kinematics | None = None) -> FloatArray:
     """(F, J, 3) root-relative, heading-normalised positions (cm), lightly smoothed by eq 5.1 with
     ω = ``window`` seconds: the whole-body pose used to place extreme key poses."""
-    data = normalised_positions(motion)
+    data = motion_data(motion, "positions", kin)
     flat = smooth(data.reshape(motion.n_frames, -1), window * motion.fps)
     return flat.reshape(data.shape)
 

@@ -10,7 +10,6 @@ frame between two extremes and the stretches before the first and after the last
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from itertools import pairwise
 
 import numpy as np
@@ -18,16 +17,11 @@ import numpy.typing as npt
 from scipy.signal import find_peaks
 
 from analysis.bvh import Motion
+from analysis.landmarks.key_poses import KeyPoses
 from analysis.landmarks.signature import pose_series
 
 REST_TYPE = 1
 EXTREME_TYPE = 2
-
-
-@dataclass(frozen=True)
-class KeyPoseSuggestion:
-    frames: tuple[int, ...]
-    types: tuple[int, ...]
 
 
 def distance_from_start(motion: Motion) -> npt.NDArray[np.float64]:
@@ -51,7 +45,7 @@ def rest_frames(distance: npt.NDArray[np.float64], extremes: np.ndarray) -> list
     return [start + int(np.argmin(distance[start : stop + 1])) for start, stop in pairwise(edges)]
 
 
-def suggest_key_poses(motion: Motion, prominence: float = 0.3) -> KeyPoseSuggestion:
+def suggest_key_poses(motion: Motion, prominence: float = 0.3) -> KeyPoses:
     """Suggested key-pose frames and types (1 rest, 2 extreme) in time order.
 
     ``prominence`` is the share of the distance curve's range a maximum must stand out by to
@@ -60,8 +54,8 @@ def suggest_key_poses(motion: Motion, prominence: float = 0.3) -> KeyPoseSuggest
     distance = distance_from_start(motion)
     extremes = extreme_frames(distance, motion.fps, prominence)
     if extremes.size == 0:
-        return KeyPoseSuggestion(frames=(), types=())
+        return KeyPoses.of([], [])
     marked = {frame: REST_TYPE for frame in rest_frames(distance, extremes)}
     marked.update({int(frame): EXTREME_TYPE for frame in extremes})
     frames = sorted(marked)
-    return KeyPoseSuggestion(frames=tuple(frames), types=tuple(marked[f] for f in frames))
+    return KeyPoses.of(frames, [marked[f] for f in frames])

@@ -7,8 +7,9 @@ and the offline pipeline's rules, so a patient hears live what the recording's p
 The server (`webapp.live`) and the capture client (`capture`) drive it; neither lives here.
 """
 
-from analysis.live.aligner import Event, LiveAligner, LiveOptions, rehearse, repetition_words
+from analysis.live.aligner import LiveAligner, LiveOptions, rehearse
 from analysis.live.session import LiveSession, ProtocolError, RateLimit, header_text
+from analysis.live.words import Event, repetition_words
 
 __all__ = [
     "Event",

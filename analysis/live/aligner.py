@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -36,6 +36,7 @@ from analysis.dtw import DTWOptions
 from analysis.kinematics import flatten, positions, relative_to_start
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics.forward_kinematics import UP_AXIS
+from analysis.live.words import GUIDANCE_TEXT, Event, repetition_words
 from analysis.online.aligners import ForwardPlotAligner, ForwardPlotOptions, OpenEndAligner
 from analysis.online.counting import Counted, RepetitionCounter
 from analysis.online.frames import FrameKinematics
@@ -53,14 +54,19 @@ from analysis.pipeline.prepare import mirrored
 from analysis.pipeline.repetition_stage import RULES
 
 FloatArray = npt.NDArray[np.float64]
-Event = dict[str, Any]
+IndexArray = npt.NDArray[np.intp]
 MIRROR_Q = np.array([1.0, 1.0, -1.0, -1.0])  # (w, x, y, z) reflected in the lateral (x) axis
-GUIDANCE_TEXT = {
-    "too fast": "Slow down: take as long as the tutor.",
-    "too slow": "A little faster: keep the tutor's pace.",
-    "overdone": "Not so far: stop where the tutor stops.",
-    "incomplete": "Go further: reach the tutor's end position.",
-}
+MIRROR_X = np.array([-1.0, 1.0, 1.0])  # a position reflected in the lateral (x) axis
+
+
+class _StreamRows(NamedTuple):
+    """Rows of a stream frame's (J, 4) rotations, each composed once from the model's joint
+    order, its mirror and the aligned joints, so that a frame is gathered once per use."""
+
+    direct: IndexArray  # the aligned joints
+    flipped: IndexArray  # their mirror images
+    gesture: IndexArray  # the joints guidance aligns
+    gesture_mirror: IndexArray
 
 
 @dataclass(frozen=True)
@@ -90,7 +96,11 @@ class LiveAligner:
     ) -> None:
         self.model, self.options = model, options or LiveOptions()
         mapping = map_joints(model.joint_names, skeleton.names)
-        self._index = [skeleton.names.index(mapping[n]) for n in model.joint_names]
+        # index arrays, not lists: numpy turns a list into an array on every use, per frame
+        self._index = np.array(
+            [skeleton.names.index(mapping[n]) for n in model.joint_names], dtype=np.intp
+        )
+        self._mirror = np.asarray(model.components.mirror, dtype=np.intp)
         self._kinematics = FrameKinematics(skeleton)
         self.n_channels = skeleton.n_channels  # values per stream frame
         self._parents = skeleton.parents
@@ -107,8 +117,11 @@ class LiveAligner:
         self._q: tuple[list[FloatArray], list[FloatArray]] = ([], [])
         self._gesture_q: list[FloatArray] = []  # (J, 4) per model-rate frame, for guidance
         self._gesture_mirror_q: list[FloatArray] = []  # their mirror image's joints
-        self._gesture_joints = list(model.components.papers.joint_index)
-        self._gesture_mirror = [model.components.mirror[j] for j in self._gesture_joints]
+        gesture = np.asarray(model.components.papers.joint_index, dtype=np.intp)
+        index, mirror, joints = self._index, self._mirror, self._joints
+        self._rows = _StreamRows(
+            index[joints], index[mirror[joints]], index[gesture], index[mirror[gesture]]
+        )
         self._paces: list[Pace] = []  # the repetitions' so far (the patient's own pace)
         # repetitions are counted on the side the patient uses (mirror image: side 1)
         self._counter = RepetitionCounter(model.components.axis.rep_frames)
@@ -125,7 +138,8 @@ class LiveAligner:
 
     def _setup_tutor(self) -> None:
         parts = self.model.components
-        self._joints = [j for j in parts.involved_index if j != 0] or list(parts.involved_index)
+        joints = [j for j in parts.involved_index if j != 0] or list(parts.involved_index)
+        self._joints = np.asarray(joints, dtype=np.intp)
         a, b = parts.tutor_reps[0] if parts.tutor_reps else (0, self.model.tutor.n_frames - 1)
         self.tutor_start, self.tutor_end = int(a), int(b)
         tutor = FrameKinematics(self.model.tutor.skeleton).rotations(self.model.tutor.frames)
@@ -242,7 +256,7 @@ class LiveAligner:
         progress along the tutor's axis of both."""
         rot = self._kinematics.rotations(values[None])
         pos = self._kinematics.positions(values[None])[0]
-        self._last_pos = pos[self._index]
+        self._last_pos = model_pos = pos[self._index]
         if self._heading is None:
             self._heading = float(quat.twist_angle(rot[0, :1], "XYZ"[UP_AXIS])[0])
             child = np.flatnonzero(self._parents >= 0)
@@ -251,36 +265,37 @@ class LiveAligner:
             undo = quat.from_axis_angle("XYZ"[UP_AXIS], -self._heading)
             # rows are the turned unit vectors, so turning row vectors p is p @ self._undo
             self._undo = quat.rotate(undo, np.eye(3)) / self._scale
-        points = (pos[self._index] - pos[0]) @ self._undo
+        points = (model_pos - pos[0]) @ self._undo
         self._points.append(points)
         parts = self.model.components
-        mirror = mirrored(points[None], parts.mirror)[0]
-        for side, pose in enumerate((points, mirror)):
-            value = float(parts.axis.progress(pose.reshape(1, -1))[0])
+        # as performed and as `mirrored` (left and right swap, x turns), one row each
+        sides = np.stack((points, points[self._mirror] * MIRROR_X)).reshape(2, -1)
+        for side, value in enumerate(parts.axis.progress(sides).tolist()):
             self._progress[side].append(value)
             low, high = self._span[side]
             self._span[side] = (min(low, value), max(high, value))
+        row = rot[0]
         # the rotations offline guidance aligns: as performed, whichever side is used
-        self._gesture_q.append(rot[0, self._index][self._gesture_joints])
-        self._gesture_mirror_q.append(rot[0, self._index][self._gesture_mirror])
-        direct, flipped = self._joint_quaternions(rot)
-        self._q[0].append(direct[0])
-        self._q[1].append(flipped[0])
-        return direct[0], flipped[0]
+        self._gesture_q.append(row[self._rows.gesture])
+        self._gesture_mirror_q.append(row[self._rows.gesture_mirror])
+        direct = row[self._rows.direct].ravel()
+        flipped = (row[self._rows.flipped] * MIRROR_Q).ravel()  # each joint's mirror image
+        self._q[0].append(direct)
+        self._q[1].append(flipped)
+        return direct, flipped
 
-    def _joint_quaternions(self, rot: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """(F, d) quaternion features of the aligned joints from (F, J, 4) stream rotations, as
-        performed and mirrored."""
-        local = rot[:, self._index]
-        flipped = local[:, self.model.components.mirror] * MIRROR_Q  # each joint's mirror image
-        n = rot.shape[0]
+    def _joint_quaternions(self, local: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(F, d) quaternion features of the aligned joints from (F, J, 4) rotations in the
+        model's joint order, as performed and mirrored."""
+        flipped = local[:, self._mirror] * MIRROR_Q  # each joint's mirror image
+        n = local.shape[0]
         return local[:, self._joints].reshape(n, -1), flipped[:, self._joints].reshape(n, -1)
 
     def features_of(self, frames: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """The features the aligners compare for whole (F, C) stream frames, as performed and
         mirrored (for checking the live alignment against offline DTW)."""
         rot = self._kinematics.rotations(np.asarray(frames, dtype=np.float64))
-        return self._joint_quaternions(rot)
+        return self._joint_quaternions(rot[:, self._index])
 
     @property
     def tutor_features(self) -> FloatArray:
@@ -362,22 +377,6 @@ class LiveAligner:
         step = parts.scoring_step
         features = repetition_features(segment[::step], [t[::step] for t in parts.templates])
         return float(parts.scorer.score(features))
-
-
-def repetition_words(event: Event, threshold: float) -> str:
-    """What the patient reads (and hears) when a repetition ends: "well done" only for one that
-    passed without a tip; a tip when there is one; a failed repetition without a tip is told its
-    score against the pass mark, so it always hears why it was not praised."""
-    number = event["index"] + 1
-    tips = [g["text"] for g in event["guidance"] if g.get("text")]
-    if tips:
-        return f"Repetition {number}: {tips[0]}"
-    if event["passed"]:
-        return f"Repetition {number}: well done."
-    return (
-        f"Repetition {number}: not counted as done well: score {event['score']:.0f}, "
-        f"{threshold:.0f} passes."
-    )
 
 
 def _grounded(points: FloatArray) -> FloatArray:

@@ -30,8 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from analysis.live.aligner import Event
 from analysis.live.session import MAX_BATCH, LiveSession, ProtocolError, error_event
+from analysis.live.words import Event
 
 FloatArray = npt.NDArray[np.float64]
 MAGIC = b"LVF"

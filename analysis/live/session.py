@@ -34,7 +34,8 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.bvh import AnalysisInputError, BVHError, Motion, dumps, read
-from analysis.live.aligner import Event, LiveAligner, LiveOptions
+from analysis.live.aligner import LiveAligner, LiveOptions
+from analysis.live.words import Event
 from analysis.pipeline.model import FittedModel
 
 FloatArray = npt.NDArray[np.float64]

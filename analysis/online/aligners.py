@@ -33,7 +33,6 @@ from analysis.dtw import (
     CostInputs,
     DTWOptions,
     as_frames,
-    cost_matrix,
     cost_rows,
     is_quaternion_kind,
 )
@@ -333,6 +332,9 @@ class ForwardPlotAligner:
         self.options = options or ForwardPlotOptions()
         self.dtw = dtw or DTWOptions(cost="geodesic")
         self.reference = as_frames(reference, "reference")
+        self._inputs = CostInputs(
+            self.reference[:1], self.reference, self.dtw.cost, self.dtw.weights
+        )
         self.type_v = TypeV() if self.dtw.step == "type-v" else None
         self.history: list[FloatArray] = []
         self.mapping: list[int] = []
@@ -357,10 +359,16 @@ class ForwardPlotAligner:
         return M + k
 
     def _costs(self, M: int, span: int, frames: FloatArray) -> FloatArray:
-        """Local costs (span + 1, len(frames)) of reference frames M..M+span against frames."""
-        return cost_matrix(
-            self.reference[M : M + span + 1], frames, self.dtw.cost, self.dtw.weights
-        )
+        """Local costs (span + 1, len(frames)) of reference frames M..M+span against frames:
+        `cost_matrix` with the frames as the query against cost inputs of the reference made once
+        (every cost kind is symmetric term by term, so the values are the same)."""
+        frames = as_frames(frames, "frames")
+        if frames.shape[1] != self.reference.shape[1]:
+            raise ValueError("the frames and the reference differ in features per frame")
+        n, out = frames.shape[0], np.empty((frames.shape[0], self.reference.shape[0]))
+        lo, hi = np.full(n, M, np.int64), np.full(n, M + span, np.int64)
+        self._inputs.with_query(frames).rows(0, n, lo, hi, out)
+        return np.ascontiguousarray(out[:, M : M + span + 1].T)
 
     def _step(self, M: int) -> int:
         m, opt = self.reference.shape[0], self.options

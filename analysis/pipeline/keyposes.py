@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.landmarks.identification import LandmarkModel, LandmarkResult, periodic_landmarks
-from analysis.landmarks.refining import Candidates
+from analysis.landmarks.key_poses import KeyPoses
 from analysis.landmarks.repetitions import Repetition, repetitions
 from analysis.landmarks.segmentation import (
     Segments,
@@ -46,7 +46,7 @@ class KeyPoseRepetitions:
 
 def periodic_analysis(
     model: LandmarkModel, refined: LandmarkResult, seed: int = 0
-) -> tuple[Candidates, dict[int, str], PeriodicSummary]:
+) -> tuple[KeyPoses, dict[int, str], PeriodicSummary]:
     """Chapter 6 (GA^K with the tutor's periods) on the refined landmarks: the kept members,
     each kept frame's origin (`origins`), and what the stage changed: candidates counted,
     frames removed, and frames inserted by the grammar typing to complete the cycle."""
@@ -87,7 +87,7 @@ def _main_peak(rep: Repetition, height: FloatArray) -> int:
     return max(rep.peaks, key=lambda f: float(height[min(f, height.size - 1)]))
 
 
-def cycles_of(kept: Candidates, model: LandmarkModel, n_frames: int) -> list[Repetition]:
+def cycles_of(kept: KeyPoses, model: LandmarkModel, n_frames: int) -> list[Repetition]:
     """Whole repetitions of the cleaned sequence (the tutor's cycle, opened and closed)."""
     reps = repetitions(
         kept.frames.tolist(), kept.types.tolist(), model.cycle_, last_frame=n_frames - 1
@@ -96,7 +96,7 @@ def cycles_of(kept: Candidates, model: LandmarkModel, n_frames: int) -> list[Rep
 
 
 def key_pose_repetitions(
-    kept: Candidates,
+    kept: KeyPoses,
     origin: dict[int, str],
     model: LandmarkModel,
     progress: FloatArray,
@@ -118,7 +118,7 @@ def key_pose_repetitions(
 
 
 def _shown(
-    kept: Candidates, origin: dict[int, str], segments: Segments, start_type: int
+    kept: KeyPoses, origin: dict[int, str], segments: Segments, start_type: int
 ) -> tuple[KeyPose, ...]:
     """The cleaned key poses with each repetition's start-type pose at its start (and one after
     the last end), so start-type key poses start the repetitions."""

@@ -22,6 +22,7 @@ import numpy.typing as npt
 from analysis import __version__ as code_version
 from analysis.bvh import Motion
 from analysis.feedback import Grammar, default_grammar
+from analysis.landmarks import KeyPoses
 from analysis.pipeline.model_fit import (
     ModelComponents,
     TrainingRecording,
@@ -32,7 +33,7 @@ from analysis.pipeline.tutor_parts import TutorParts, fit_tutor_parts
 
 # 3: one calibrated score scale (pass at 70), corrections; 4: tutor-distance scale;
 # 5: the parsed grammar and the tutor's parts (`tutor_parts`) stored with the model
-FORMAT_VERSION = 5
+FORMAT_VERSION = 6
 MAGIC = b"PHYSIO-MODEL\n"
 FloatArray = npt.NDArray[np.float64]
 Progress = Callable[[str, float], None]
@@ -51,8 +52,7 @@ class FittedModel:
     format_version: int
     code_version: str
     tutor: Motion
-    landmark_frames: tuple[int, ...]
-    landmark_types: tuple[int, ...]
+    key_poses: KeyPoses  # the tutor's, as marked by the therapist
     type_names: dict[int, str]
     involved_joints: tuple[str, ...]
     grammar: str
@@ -107,14 +107,13 @@ def build_model(
     )
     text = grammar or default_grammar(list(involved), names)
     rules = Grammar.parse(text)  # a bad grammar fails the build, not every analysis
-    landmarks = (list(landmark_frames), list(landmark_types))
-    tutor_parts = fit_tutor_parts(tutor, landmarks, components, involved)
+    key_poses = KeyPoses.of(landmark_frames, landmark_types)
+    tutor_parts = fit_tutor_parts(tutor, key_poses, components, involved)
     return FittedModel(
         format_version=FORMAT_VERSION,
         code_version=code_version,
         tutor=tutor,
-        landmark_frames=tuple(int(f) for f in landmark_frames),
-        landmark_types=tuple(int(t) for t in landmark_types),
+        key_poses=key_poses,
         type_names=names,
         involved_joints=tuple(involved),
         grammar=text,

@@ -26,7 +26,7 @@ from analysis.assessment import (
 )
 from analysis.bvh import AnalysisInputError, Motion
 from analysis.kinematics import flatten, relative_to_start, resample, rotations, scaled_positions
-from analysis.landmarks import ProgressAxis, fit_axis
+from analysis.landmarks import KeyPoses, ProgressAxis, fit_axis
 from analysis.pipeline.model_parts import PaperParts, fit_paper_parts
 from analysis.pipeline.prepare import mirrored, prepare, progress_signal
 
@@ -87,8 +87,7 @@ class TrainingRecording:
     """A therapist-labelled recording: key poses and a label ('correct', 'incorrect' or 1..4)."""
 
     motion: Motion
-    landmark_frames: tuple[int, ...]
-    landmark_types: tuple[int, ...]
+    key_poses: KeyPoses  # frames of the file as given
     label: str
 
 
@@ -201,8 +200,7 @@ def _at_tutor_rate(
         motion = resample(item.motion, tutor.fps)
         rate = motion.fps / item.motion.fps
         last = motion.n_frames - 1
-        marks = sorted({min(round(f * rate), last): t for f, t in zip(
-            item.landmark_frames, item.landmark_types, strict=True)}.items())  # fmt: skip
+        marks = sorted({min(round(f * rate), last): t for f, t in item.key_poses}.items())
         out.append((motion, [f for f, _ in marks], [t for _, t in marks]))
     return out
 
@@ -220,8 +218,7 @@ def assessment_parts(
     if leveled:
         feats, levels, kinds = [], [], []
         for item in leveled:
-            known = [(f, k) for f, k in zip(item.landmark_frames, item.landmark_types, strict=True)
-                     if k in means]  # fmt: skip
+            known = [(f, k) for f, k in item.key_poses if k in means]
             q = rotations(item.motion)
             feats.append(landmark_features(q, [f for f, _ in known], [k for _, k in known], means))
             levels.append(np.full(feats[-1].shape[:2], int(item.label)))
@@ -250,7 +247,8 @@ def training_deviations(  # noqa: PLR0917 (the scoring set-up the pipeline uses)
         feats = flatten(points[:, scored])
         correct = item.label in ("correct", "1")
         rate = prepared.motion.fps / item.motion.fps  # landmarks are frames of the file as given
-        for first, last in tutor_repetitions(item.landmark_frames, item.landmark_types):
+        marks = item.key_poses
+        for first, last in tutor_repetitions(marks.frames.tolist(), marks.types.tolist()):
             a, b = round(first * rate), round(last * rate)
             segment = relative_to_start(feats[a : b + 1])[::step]
             out.append((repetition_features(segment, tutor_templates), correct))

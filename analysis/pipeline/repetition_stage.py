@@ -53,7 +53,7 @@ def synchronise(landmarks: tuple[KeyPose, ...], model: FittedModel) -> Synchroni
     """Pair the recording's key poses with the tutor's (Alg 11) and map time (Alg 12)."""
     frames = [m.frame for m in landmarks]
     types = [m.type for m in landmarks]
-    tutor_frames, tutor_types = model.landmark_frames, model.landmark_types
+    tutor_frames, tutor_types = model.key_poses.frames, model.key_poses.types
     pairs = synchronise_landmarks(types, tutor_types)
     if not pairs or not frames:
         return Synchronised({}, None)

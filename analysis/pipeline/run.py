@@ -196,9 +196,11 @@ def find_repetitions(
         prepared = prepare(motion, model.tutor.skeleton, model.fps, parts.axis.rep_frames, limits)
         progress, used_mirror = progress_signal(prepared, parts.axis, parts.mirror)
     with timer("landmark_identification"):
-        identified = papers.landmarks.identify(prepared.motion)
+        identified = papers.landmarks.identify(prepared.motion, prepared.kinematics)
     with timer("landmark_refining"):
-        refined = papers.landmarks.refine_identified(identified, prepared.motion)
+        refined = papers.landmarks.refine_identified(
+            identified, prepared.motion, prepared.kinematics
+        )
     with timer("periodic_analysis"):
         kept, origin, periodic = periodic_analysis(papers.landmarks, refined)
     with timer("repetitions"):

@@ -23,7 +23,7 @@ from analysis.feedback.advice import MAX_CORRECTIONS, Advice, advise
 from analysis.feedback.text import correction_rules
 from analysis.kinematics import flatten, range_of_motion, relative_to_start
 from analysis.kinematics import quaternions as quat
-from analysis.landmarks import Segments
+from analysis.landmarks import KeyPoses, Segments
 from analysis.pipeline.advice_stage import recording_passed, repetition_measures, tutor_reference
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import Prepared, in_model_order
@@ -38,7 +38,7 @@ def label_landmarks(
 ) -> tuple[KeyPose, ...]:
     """Type 1 at each repetition start (and the last end); at each end of range, the tutor's
     non-start landmark type whose mean pose is closest."""
-    peak_types = sorted({t for t in model.landmark_types if t != 1}) or [2]
+    peak_types = sorted({t for t in model.key_poses.types.tolist() if t != 1}) or [2]
     marks: list[KeyPose] = []
     for start, peak in zip(segments.starts, segments.peaks, strict=True):
         marks.append(KeyPose(int(start), 1))
@@ -187,10 +187,9 @@ def playback_arrays(
     """The four demonstration skeletons (paper 004, 7.3) as world positions (F, J, 3) float32 on
     the patient's timeline, with the model's joint names and parents, and the landmarks."""
     skeleton = model.tutor.skeleton
-    frames = np.array([m.frame for m in landmarks], dtype=np.int64)
-    types = np.array([m.type for m in landmarks], dtype=np.int64)
+    shown = KeyPoses.of([m.frame for m in landmarks], [m.type for m in landmarks])
     kin, index = prepared.kinematics, prepared.joint_index
-    patient = Performance(prepared.local_q, in_model_order(kin.local_t, index), frames, types)
+    patient = Performance(prepared.local_q, in_model_order(kin.local_t, index), shown)
     demo = demonstration_skeletons(
         skeleton, patient, model.tutor_parts.take, model.components.mean_poses,
         gamma_vector(dict(gamma), skeleton.names), tutor_root="patient",
@@ -204,8 +203,8 @@ def playback_arrays(
         "tutor_frame_map": demo.tutor_frame_map.astype(np.float32),
         "parents": skeleton.parents.astype(np.int32),
         "joint_names": np.array(skeleton.names),
-        "landmark_frames": frames.astype(np.int32),
-        "landmark_types": types.astype(np.int32),
+        "landmark_frames": shown.frames.astype(np.int32),
+        "landmark_types": shown.types.astype(np.int32),
     }
 
 

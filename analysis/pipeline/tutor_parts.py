@@ -24,6 +24,7 @@ from analysis.bvh import Motion, Skeleton
 from analysis.clinical import angle_ranges, measure
 from analysis.clinical.body import Body, find_body, find_joints, take_vertical
 from analysis.kinematics import Kinematics, kinematics, scaled_positions
+from analysis.landmarks import KeyPoses
 from analysis.pipeline.gestures import reference_excursion
 from analysis.pipeline.model_fit import ModelComponents
 from analysis.retrieval import recording_features
@@ -147,20 +148,16 @@ def pace_reference_of(parts: ModelComponents, local_q: FloatArray) -> PaceRefere
 
 def fit_tutor_parts(
     tutor: Motion,
-    landmarks: tuple[Sequence[int], Sequence[int]],
+    key_poses: KeyPoses,
     parts: ModelComponents,
     involved_joints: Sequence[str],
 ) -> TutorParts:
     """Everything of `TutorParts` from one forward-kinematics pass of the tutor; ``landmarks``:
-    its key-pose frames and types; ``parts``: the model's fitted parts (its repetitions, the
+    its key poses; ``parts``: the model's fitted parts (its repetitions, the
     pace rules' joints)."""
     kin, body = kinematics(tutor), find_body(tutor.skeleton)
     bounds = parts.tutor_reps
-    frames, types = landmarks
-    take = Performance(
-        kin.local_q, kin.local_t,
-        np.asarray(frames, dtype=np.int64), np.asarray(types, dtype=np.int64),
-    )  # fmt: skip
+    take = Performance(kin.local_q, kin.local_t, key_poses)
     every = list(range(len(tutor.skeleton.names)))
     return TutorParts(
         reference=reference_of(tutor, bounds, involved_joints, (kin, body)),

@@ -19,6 +19,7 @@ from analysis.assessment import tutor_mean_poses
 from analysis.bvh import read
 from analysis.kinematics import forward, rotations
 from analysis.kinematics import quaternions as quat
+from analysis.landmarks import KeyPoses
 from tests.synthetic_motion import SyntheticConfig, generate
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
@@ -135,10 +136,10 @@ def test_ui_prmd_session_toward_the_s01_tutor():
 def test_demonstration_skeletons(synthetic):
     tutor, patient, means = synthetic
     t_perf = Performance.from_motion(
-        tutor.motion, tutor.truth.landmark_frames, tutor.truth.landmark_types
+        tutor.motion, KeyPoses.of(tutor.truth.landmark_frames, tutor.truth.landmark_types)
     )
     p_perf = Performance.from_motion(
-        patient.motion, patient.truth.landmark_frames, patient.truth.landmark_types
+        patient.motion, KeyPoses.of(patient.truth.landmark_frames, patient.truth.landmark_types)
     )
     sk, n = patient.motion.skeleton, patient.motion.n_frames
     still = demonstration_skeletons(sk, p_perf, t_perf, means, 0.0)
@@ -155,9 +156,9 @@ def test_demonstration_skeletons(synthetic):
     assert back.size == 1 and fmap[back[0]] == t_frames[-1] and fmap[back[0] + 1] <= t_frames[1]
 
     full = demonstration_skeletons(sk, p_perf, t_perf, means, 1.0, tutor_root="patient")
-    lm = p_perf.landmark_frames
+    lm = p_perf.key_poses.frames
     # γ = 1: the patient takes the tutor's mean poses, the tutor takes the patient's poses.
-    expected = forward(sk, _targets(means, p_perf.landmark_types), p_perf.local_t[lm])[1]
+    expected = forward(sk, _targets(means, p_perf.key_poses.types), p_perf.local_t[lm])[1]
     np.testing.assert_allclose(full.patient_adjusted[lm], expected, atol=1e-6)
     np.testing.assert_allclose(full.tutor_adjusted[lm], full.patient[lm], atol=1e-6)
     np.testing.assert_allclose(full.tutor[:, 0], full.patient[:, 0])

@@ -23,7 +23,7 @@ from analysis.landmarks.identification import (
     periodic_landmarks,
     tutor_cycle,
 )
-from analysis.landmarks.refining import Candidates
+from analysis.landmarks.key_poses import KeyPoses
 from analysis.landmarks.signature import pose_series
 from tests.synthetic_motion import SyntheticConfig, generate
 
@@ -197,11 +197,11 @@ def test_bad_tutor_landmarks_are_refused(synthetic, frames, types):
 
 def test_periodic_landmarks_drop_an_out_of_sequence_member():
     # a three-pose cycle 1 → 2 → 3 → 1 with a 3 detected too early in the second repetition
-    found = Candidates(np.arange(0, 80, 10), np.array([1, 2, 3, 1, 3, 2, 3, 1]))
+    found = KeyPoses(np.arange(0, 80, 10), np.array([1, 2, 3, 1, 3, 2, 3, 1]))
     kept = periodic_landmarks(found, [[1, 2, 3, 1]])
     assert kept.types.tolist() == [1, 2, 3, 1, 2, 3, 1]
     assert kept.frames.tolist() == [0, 10, 20, 30, 50, 60, 70]
-    empty = Candidates(np.zeros(0, np.int64), np.zeros(0, np.int64))
+    empty = KeyPoses(np.zeros(0, np.int64), np.zeros(0, np.int64))
     assert periodic_landmarks(empty, [[1, 2, 3, 1]]).frames.size == 0
 
 

@@ -15,6 +15,9 @@ from scipy.spatial.transform import Rotation, Slerp
 
 import analysis.clinical.body as body_module
 import analysis.clinical.workspace as workspace_module
+import analysis.kinematics.forward_kinematics as fk_module
+import analysis.landmarks.identification as identification_module
+import analysis.landmarks.signature as signature_module
 import analysis.pipeline.prepare as prepare_module
 import analysis.pipeline.tutor_parts as tutor_parts_module
 from analysis.adjustment.affine import adjust
@@ -61,6 +64,20 @@ def test_one_kinematics_pass_and_one_body_per_recording(model, monkeypatch):
     ]
 
 
+def test_the_key_pose_stages_read_the_pass_they_are_given(model, monkeypatch):
+    """No stage computes the recording's rotations or positions a second time behind the
+    pipeline's back (there is no memo to hide it): the rotations are read from the frames once,
+    by the one `kinematics` pass, and world positions never on their own."""
+    upload = read(DATA / "sessions/m07_s03_incorrect.bvh.gz")
+    calls: list[str] = []
+    for name in ("_rotations", "_positions", "heading_angles", "world"):
+        counting(monkeypatch, fk_module, name, calls)
+    for module in (signature_module, identification_module):
+        counting(monkeypatch, module, "kinematics", calls)
+    assert analyse(upload, model).to_json()["landmarks"]
+    assert calls == ["analysis.kinematics.forward_kinematics._rotations"]
+
+
 def test_the_model_stores_what_depends_on_it_alone(model):
     parts = model.tutor_parts
     assert model.rules == Grammar.parse(model.grammar)
@@ -68,7 +85,7 @@ def test_the_model_stores_what_depends_on_it_alone(model):
     fresh = reference_of(model.tutor, model.components.tutor_reps, model.involved_joints, seen)
     assert parts.reference == fresh and parts.reference.involved
     np.testing.assert_array_equal(parts.take.local_q, seen[0].local_q)
-    assert parts.take.landmark_frames.tolist() == list(model.landmark_frames)
+    assert parts.take.key_poses.same_as(model.key_poses)
     assert parts.features.shape[1] == 17 and parts.amplitudes.shape == (len(model.joint_names),)
     buffer = io.BytesIO()
     dump_model(model, buffer)

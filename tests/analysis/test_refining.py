@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from analysis.landmarks.key_poses import KeyPoses
 from analysis.landmarks.refining import (
-    Candidates,
     RefineOptions,
     cluster,
     em_clusters,
@@ -27,7 +27,7 @@ from analysis.landmarks.regularise import (
 
 
 def cands(frames, types):
-    return Candidates(np.asarray(frames, dtype=np.int64), np.asarray(types, dtype=np.int64))
+    return KeyPoses(np.asarray(frames, dtype=np.int64), np.asarray(types, dtype=np.int64))
 
 
 def test_temporal_clusters_eq_5_29_by_hand():

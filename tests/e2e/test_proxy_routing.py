@@ -76,15 +76,21 @@ def routes(access_log: Path) -> dict[str, set[str]]:
     return served
 
 
+def logged(access_log: Path, marker: str, count: int = 1) -> None:
+    """Wait (up to 10 s) until ``count`` lines of the proxy's log hold ``marker``: nginx writes a
+    request's line when it has finished with it, which can be after the client has its answer."""
+    deadline = time.monotonic() + 10
+    while True:
+        lines = [line for line in access_log.read_text().splitlines() if marker in line]
+        if len(lines) >= count or time.monotonic() > deadline:
+            return
+        time.sleep(0.2)
+
+
 def socket_routes(access_log: Path, connections: int) -> dict[str, set[str]]:
     """The WebSocket paths' upstreams, once the proxy has logged every connection (it logs one
     when it closes)."""
-    deadline = time.monotonic() + 10
-    while True:
-        lines = [line for line in access_log.read_text().splitlines() if " /ws/" in line]
-        if len(lines) >= connections or time.monotonic() > deadline:
-            break
-        time.sleep(0.2)
+    logged(access_log, " /ws/", connections)
     return {path: ups for path, ups in routes(access_log).items() if path.startswith("/ws/")}
 
 
@@ -93,6 +99,7 @@ def test_pages_and_api_reach_gunicorn_through_the_proxy(stack):
     with urllib.request.urlopen(f"{proxy.url}/accounts/login/", timeout=10) as response:
         assert response.status == 200
         assert b'name="password"' in response.read()
+    logged(proxy.access_log, " /accounts/login/ ")
     assert routes(proxy.access_log)["/accounts/login/"] == {address["web"]}
 
 
@@ -113,4 +120,5 @@ def test_each_live_session_stays_on_one_process_and_sessions_use_both(stack):
     # 17 sessions all on one process by chance: 1 in 65,536
     assert set().union(*sockets.values()) == live
     # the sessions were created through the proxy, by gunicorn
+    logged(proxy.access_log, " /api/v1/live-sessions/ ")
     assert routes(proxy.access_log)["/api/v1/live-sessions/"] == {address["web"]}

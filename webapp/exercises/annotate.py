@@ -147,8 +147,8 @@ def tutor_data(request: HttpRequest, pk) -> JsonResponse:
             "landmark_types": exercise.tutor_landmark_types,
             "type_names": exercise.landmark_type_names,
             "involved_joints": ticked(motion.skeleton, exercise.involved_joints),
-            "suggested_frames": list(suggestion.frames),
-            "suggested_types": list(suggestion.types),
+            "suggested_frames": suggestion.frames.tolist(),
+            "suggested_types": suggestion.types.tolist(),
         }
     )
 

@@ -143,11 +143,11 @@ class Exercise(models.Model):
         if not kept:
             suggestion = suggest_key_poses(motion)
             earlier = self.landmark_type_names or {}
-            self.tutor_landmark_frames = list(suggestion.frames)
-            self.tutor_landmark_types = list(suggestion.types)
+            self.tutor_landmark_frames = suggestion.frames.tolist()
+            self.tutor_landmark_types = suggestion.types.tolist()
             self.landmark_type_names = {
                 str(t): earlier[str(t)]
-                for t in sorted(set(suggestion.types))
+                for t in sorted(set(suggestion.types.tolist()))
                 if earlier.get(str(t))
             }
         names = set(motion.skeleton.names)
