@@ -17,7 +17,8 @@ import warnings
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
-from typing import Literal
+from types import ModuleType
+from typing import TYPE_CHECKING, Literal
 
 import numba as nb
 import numpy as np
@@ -26,13 +27,23 @@ import numpy.typing as npt
 from analysis.dtw.frame_costs import as_frames, cost_matrix, n_joints
 from analysis.dtw.offline import DPState, DTWOptions, band_limits
 
-with warnings.catch_warnings():  # cma warns that matplotlib (plots only) is missing
-    warnings.simplefilter("ignore")
+if TYPE_CHECKING:
     import cma
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 Target = Literal["online", "path"]
+
+
+def _cma() -> ModuleType:
+    """The cma library, imported when weights are fitted: importing it loads matplotlib's
+    plotting (0.8 s on the project's VM), which every web, worker and command-line process would
+    otherwise pay for at start. (A third-party library, not a project module: no cycle.)"""
+    with warnings.catch_warnings():  # cma warns when matplotlib (plots only) is missing
+        warnings.simplefilter("ignore")
+        import cma
+
+    return cma
 
 
 def aligned_pairs(C: FloatArray, options: DTWOptions, target: Target = "online") -> IntArray:
@@ -118,7 +129,7 @@ class JointWeightOptimizer:
             "maxiter": self.iterations, "verbose": -9, "tolfun": 0, "tolfunhist": 0, "tolx": 0,
             "tolflatfitness": self.iterations, "tolstagnation": self.iterations,
         }  # fmt: skip
-        return cma.CMAEvolutionStrategy(np.ones(joints), self.sigma0, options)
+        return _cma().CMAEvolutionStrategy(np.ones(joints), self.sigma0, options)
 
     def fit(
         self,
