@@ -278,24 +278,22 @@ class LiveAligner:
         # the rotations offline guidance aligns: as performed, whichever side is used
         self._gesture_q.append(row[self._rows.gesture])
         self._gesture_mirror_q.append(row[self._rows.gesture_mirror])
-        direct = row[self._rows.direct].ravel()
-        flipped = (row[self._rows.flipped] * MIRROR_Q).ravel()  # each joint's mirror image
+        direct, flipped = (q[0] for q in self._joint_quaternions(rot))
         self._q[0].append(direct)
         self._q[1].append(flipped)
         return direct, flipped
 
-    def _joint_quaternions(self, local: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """(F, d) quaternion features of the aligned joints from (F, J, 4) rotations in the
-        model's joint order, as performed and mirrored."""
-        flipped = local[:, self._mirror] * MIRROR_Q  # each joint's mirror image
-        n = local.shape[0]
-        return local[:, self._joints].reshape(n, -1), flipped[:, self._joints].reshape(n, -1)
+    def _joint_quaternions(self, rot: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(F, d) quaternion features of the aligned joints from (F, J, 4) stream rotations, as
+        performed and mirrored (each joint's mirror image)."""
+        n = rot.shape[0]
+        direct = rot[:, self._rows.direct].reshape(n, -1)
+        return direct, (rot[:, self._rows.flipped] * MIRROR_Q).reshape(n, -1)
 
     def features_of(self, frames: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
         """The features the aligners compare for whole (F, C) stream frames, as performed and
         mirrored (for checking the live alignment against offline DTW)."""
-        rot = self._kinematics.rotations(np.asarray(frames, dtype=np.float64))
-        return self._joint_quaternions(rot[:, self._index])
+        return self._joint_quaternions(self._kinematics.rotations(np.asarray(frames, np.float64)))
 
     @property
     def tutor_features(self) -> FloatArray:
