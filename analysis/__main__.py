@@ -1,4 +1,5 @@
-"""``python -m analysis build-model | analyse`` (CONTRACTS.md): JSON to stdout, exit 2 on bad input.
+"""``python -m analysis build-model | analyse`` (README, "Command line"): JSON to stdout, exit 2
+on bad input.
 
     python -m analysis build-model --tutor TUTOR.bvh[.gz] --landmarks "f1;f2;..." \\
         --types "t1;t2;..." [--train "REC.bvh.gz|f1;f2;...|t1;t2;...|LABEL" ...] --out MODEL
@@ -6,7 +7,7 @@
 
 Recordings and tutors may be any capture file `analysis.sources.read_recording` reads (.bvh,
 .bvh.gz, Kinect .csv, Azure Kinect or MediaPipe .json, .trc, .c3d); the result names its source.
-    python -m analysis stream ...   (live sessions: handed over to `capture.stream`)
+    python -m analysis stream ...   (live sessions: handed over to ``python -m capture``)
 
 The top of the core: it may import every package of `analysis` and hands the `stream`
 subcommand over to the capture client above the core. Importing it runs nothing; tests and
@@ -123,17 +124,27 @@ def parser() -> argparse.ArgumentParser:
         help="another exercise's model: a recording nearer its tutor is named by ID",
     )  # fmt: skip
     a.set_defaults(handler=run_analysis)
-    # live sessions (CONTRACTS.md): the one hand-over from the core to the capture client above it
-    # (not a cycle: capture imports analysis.live and the model, never this module)
-    from capture import stream
-
-    s = commands.add_parser("stream", help="stream a recording to an on-line aligner")
-    stream.add_arguments(s)
-    s.set_defaults(handler=stream.run)
+    # Listed for --help only: `main` hands `stream ...` to the capture client before parsing.
+    commands.add_parser(
+        "stream", help="stream a recording to an on-line aligner (python -m capture)"
+    )
     return top
 
 
+def hand_over_stream(argv: Sequence[str]) -> int:
+    """``stream ...``: the capture client's own command line (``python -m capture``)."""
+    # Imported here, only to stream: the capture client needs the network packages
+    # (websockets), which `analyse` and `build-model` never do (not a cycle: capture imports
+    # analysis.live and the model, never this module).
+    from capture.stream import main as stream_main
+
+    return stream_main(argv)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["stream"]:
+        return hand_over_stream(argv[1:])
     args = parser().parse_args(argv)
     try:
         return int(args.handler(args))

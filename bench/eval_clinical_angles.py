@@ -9,6 +9,11 @@ Bandai-Namco sample (read at bench time only: CC BY-NC, never copied into the re
    beyond the body's limits, and the angles not measurable (by reason).
 3. Bandai-Namco raise-up takes: each take's first frame (the actor standing before the raise),
    hips, knees, shoulders and trunk in degrees.
+4. Issue 35: every development session and rig, every amount a finding or correction can be
+   made of (a clinical angle's or a compensation's range over the recording, which bounds every
+   range difference and posture difference between two of its stretches) against the measure's
+   physiological span (`analysis.clinical.physiological_span`): the count beyond must be 0;
+   and the compensations not measurable (beyond a body, or noisier than they would flag).
 
     .venv/bin/python -m bench.eval_clinical_angles [--bandai SHARED/data/bandai-namco-motion-2/data]
 """
@@ -22,10 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
+from analysis.assessment.compensations import compensation_measures
 from analysis.bvh import Motion, read
-from analysis.clinical import measure
+from analysis.clinical import measure, physiological_span
+from analysis.clinical.body import find_body, take_vertical
 from analysis.clinical.labels import split_side
-from analysis.kinematics import positions
+from analysis.kinematics import kinematics, positions
 
 ROOT = Path(__file__).resolve().parents[1]
 UI_PRMD = ROOT / "data" / "ui-prmd"
@@ -91,13 +98,40 @@ def bandai(folder: Path) -> None:
               f"{s['trunk_flexion'][0]:.1f} |")  # fmt: skip
 
 
+def amounts() -> None:
+    paths = sorted([*UI_PRMD.glob("sessions/*.bvh.gz"), *(ROOT / "data" / "rigs").glob("*.bvh")])
+    checked, beyond, notes = 0, [], Counter()
+    for path in paths:
+        motion = read(path)
+        series = dict(measure(motion).series)
+        body = find_body(motion.skeleton)
+        pos = kinematics(motion).positions
+        up = body.up if body.upright else take_vertical(pos, body)
+        kept, why = compensation_measures(pos, body.joints, up)
+        series.update(kept)
+        notes.update(n.split(":")[0] for n in why.values())
+        for name, values in series.items():
+            if np.isfinite(values).any():
+                checked += 1
+                if float(np.nanmax(values) - np.nanmin(values)) > physiological_span(name):
+                    beyond.append(f"{path.name} {name}")
+    print(f"\n{len(paths)} recordings (sessions and rigs): {checked} measures' ranges checked, "
+          f"{len(beyond)} beyond the physiological span {beyond[:5]}; compensations left out: "
+          f"{dict(notes)}")  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--bandai", type=Path, default=BANDAI)
+    parser.add_argument("--amounts", action="store_true", help="only item 4 (issue 35)")
     args = parser.parse_args()
+    if args.amounts:
+        amounts()
+        return
     print(f"Clinical angles, {time.strftime('%Y-%m-%d')}\n")
     abductions()
     coverage()
+    amounts()
     bandai(args.bandai)
 
 

@@ -7,7 +7,8 @@ them), runs every method on the same samples and prints a markdown table of per-
 accuracy, recall, tnr, fnr, fdr and seconds per sample, ours beside the thesis's numbers.
 
 Protocols: ``spec`` inserts in-period / out-of-period extraneous members at 0.1 / 0.2 per
-ground-truth member and drops members at 0.1, as SPEC.md reads 6.4.1; ``light`` keeps the 1:2
+ground-truth member and drops members at 0.1, as the project's specification reads 6.4.1; ``light``
+keeps the 1:2
 ratio but inserts 0.1 extraneous members per member in all, which is what the thesis's "None"
 row implies (tnr 0.50 = missing / (missing + extraneous), fdr 0.11).
 """

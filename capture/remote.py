@@ -258,7 +258,7 @@ def run_remote(
 ) -> int:
     """Create the session (or join ``session``, one a therapist started on the patient's page),
     stream, print the events; 0 on success. The watch page's address goes to stderr: stdout
-    holds only the JSON lines of CONTRACTS.md."""
+    holds only the JSON lines of the interface contract (README, "Command line")."""
     if session is None:
         created = create_session(server, token, patient, exercise)
     else:

@@ -1,4 +1,5 @@
-"""``python -m analysis stream``: a capture client for live sessions (CONTRACTS.md).
+"""``python -m capture`` (also ``python -m analysis stream``, the interface contract): a capture
+client for live sessions.
 
     python -m analysis stream --model MODEL RECORDING.bvh[.gz] [--speed S] --json-lines
     python -m analysis stream RECORDING.bvh[.gz] --server http://HOST:PORT --token TOKEN \\
@@ -19,13 +20,15 @@ stderr says where the session can be watched.
 from __future__ import annotations
 
 import argparse
-from collections.abc import Iterator
+import sys
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
+from analysis.bvh import AnalysisInputError, BVHError
 from analysis.live import Event, LiveSession
-from analysis.pipeline.model import FittedModel, load_model
+from analysis.pipeline.model import FittedModel, ModelVersionError, load_model
 from capture.remote import run_remote
 from capture.sources import (
     Source,
@@ -123,3 +126,21 @@ def run(args: argparse.Namespace) -> int:
         args.server, args.token, args.patient, args.exercise, source,
         batch=batch, session=getattr(args, "session", None),
     )  # fmt: skip
+
+
+def parser() -> argparse.ArgumentParser:
+    top = argparse.ArgumentParser(
+        prog="python -m capture", description="Stream a recording to an on-line aligner."
+    )
+    add_arguments(top)
+    return top
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The capture client's own entry point: exit 2 with one line for what it cannot use."""
+    args = parser().parse_args(argv)
+    try:
+        return int(run(args))
+    except (BVHError, AnalysisInputError, ModelVersionError, OSError, ValueError) as error:
+        print(f"error: {' '.join(str(error).split()) or type(error).__name__}", file=sys.stderr)
+        return 2

@@ -24,7 +24,7 @@ NETWORK = {
 }  # fmt: skip
 ABOVE_THE_CORE = {"capture", "workers", "webapp"}
 # The command line (`analysis/__main__.py`, the top of the core) hands its `stream` subcommand
-# over to the capture client above the core (CONTRACTS.md); nothing else in the core may.
+# over to the capture client above the core (the interface contract); nothing else in the core may.
 HAND_OVER = {"analysis.__main__": {"capture"}}
 
 

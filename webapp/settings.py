@@ -148,6 +148,8 @@ STATICFILES_DIRS = [
     ("vendor/three/build", _THREE / "build"),
     ("vendor/three/examples/jsm/controls", _THREE / "examples" / "jsm" / "controls"),
     ("vendor/plotly", Path(__import__("plotly").__file__).parent / "package_data"),
+    # the camera page's pose engine (npm @mediapipe/pose: its script, WebAssembly and models)
+    ("vendor/mediapipe/pose", BASE_DIR / "node_modules" / "@mediapipe" / "pose"),
 ]
 # Static files straight from their folders (no collectstatic): with DEBUG on, and under `make
 # run`'s launcher, which serves with DEBUG off (workers/local.py sets it).
@@ -374,14 +376,25 @@ SPECTACULAR_SETTINGS = {
     "POSTPROCESSING_HOOKS": [
         "drf_spectacular.hooks.postprocess_schema_enums",
         "webapp.api.result_schema.add_result_components",
+        "webapp.api.schema.finish_schema",  # error bodies, null and score (webapp/api/schema)
     ],
 }
 
 LOGGING = {
     "version": 1,
     "disable_existing_loggers": False,
+    # One line per refused request, no traceback; status polls only with LOG_POLLS=1
+    # (webapp/log_filters.py).
+    "filters": {
+        "refusal_in_one_line": {"()": "webapp.log_filters.RefusalInOneLine"},
+        "quiet_access_log": {"()": "webapp.log_filters.QuietAccessLog"},
+    },
     "handlers": {"console": {"class": "logging.StreamHandler"}},
     "root": {"handlers": ["console"], "level": os.environ.get("LOG_LEVEL", "INFO")},
-    # django-axes reports every successful login at INFO; failures and lockouts are warnings.
-    "loggers": {"axes": {"level": os.environ.get("AXES_LOG_LEVEL", "WARNING")}},
+    "loggers": {
+        # django-axes reports every successful login at INFO; failures and lockouts are warnings.
+        "axes": {"level": os.environ.get("AXES_LOG_LEVEL", "WARNING")},
+        "django.request": {"filters": ["refusal_in_one_line"]},
+        "django.channels.server": {"filters": ["quiet_access_log"]},
+    },
 }

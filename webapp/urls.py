@@ -17,6 +17,7 @@ urlpatterns = [
     path("exercises/", include("webapp.exercises.urls")),
     path("recordings/", include("webapp.recordings.urls")),
     path("live/", include("webapp.live.urls")),
+    path("my/live/camera/", include("webapp.live.camera_urls")),
     path("", include("webapp.reports.urls")),
     path("", include("webapp.dashboard.urls")),
 ]

@@ -152,6 +152,7 @@ def build_version(model_id: str) -> str:
         )
         return "failed"
     save_fitted(row, fitted)
-    Exercise.objects.filter(pk=row.exercise_id).update(active_model=row)
+    # A replaced reference whose key poses await the therapist's confirmation is not put in use.
+    Exercise.objects.filter(pk=row.exercise_id, key_poses_to_confirm=False).update(active_model=row)
     training.mark_used(row.exercise, row)
     return "ready"

@@ -79,6 +79,10 @@ def local_env(env: Mapping[str, str]) -> dict[str, str]:
         (broker / sub).mkdir(parents=True, exist_ok=True)
     out["LOCAL_BROKER_DIR"] = str(broker)
     out.setdefault("DJANGO_SETTINGS_MODULE", "webapp.settings")
+    # Static files come from their folders (WHITENOISE_USE_FINDERS): an empty collected-files
+    # folder of this data folder's own, so WhiteNoise does not warn of a missing one at each start.
+    static_root = Path(out.setdefault("STATIC_ROOT", str(data_dir(out) / "static")))
+    static_root.mkdir(parents=True, exist_ok=True)
     for name, value in PLAIN_HTTP.items():
         out.setdefault(name, value)
     if not out.get("SECRET_KEY"):

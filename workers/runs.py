@@ -7,7 +7,8 @@ RUNNING → SUCCEEDED | FAILED: written only by the holder of the current token,
 
 Every way a run ends (`succeed`, `fail`, `give_up`, and `workers.housekeeping` for runs killed
 by a time limit) then refreshes what is stored from the outcome, in the same call and in view:
-the patient's row of the dashboard's attention list and the run's progress point
+the run's reading (its verdicts, pass count and statements: `webapp.recordings.reading`), the
+patient's row of the dashboard's attention list and the run's progress point
 (`webapp.dashboard.precompute.refresh_after_run`), so pages read them without recomputing.
 """
 

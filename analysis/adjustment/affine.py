@@ -28,7 +28,8 @@ Public API:
 - ``Performance`` (local rotations, translations, key poses of one take) and
   ``demonstration_skeletons(skeleton, patient, tutor, mean_poses, gamma) -> Demonstration``: world
   positions (F_patient, J, 3) of the patient; the patient adjusted by γ toward the tutor's mean pose
-  of each landmark's type; the tutor synchronised to the patient (``analysis.sync``); and that
+  of each landmark's type; the tutor synchronised to the patient (``analysis.adjustment.sync``);
+  and that
   synchronised tutor adjusted by ``tutor_gamma`` (default γ) toward the patient's landmark poses.
   Patient skeletons use the patient's translations, tutor skeletons the tutor's (resampled), or,
   with ``tutor_root="patient"``, the patient's root translation so that all four stand together.

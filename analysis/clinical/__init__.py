@@ -4,14 +4,16 @@ Public API:
 
 - `angle_series(motion, method="orientation") -> dict[str, ndarray]`: degrees per frame for
   each angle of `ANGLE_NAMES` the skeleton gives (``knee_flexion_left`` … ``trunk_flexion``,
-  ``trunk_lateral_flexion``; CONTRACTS.md ``clinical_angles``).
+  ``trunk_lateral_flexion``; the interface contract's ``clinical_angles``).
 - `angle_ranges(series, start=None, end=None) -> dict[str, AngleRange]`: min/max per angle over
   a recording or a repetition (frames ``start..end`` inclusive).
 - `clinical_angles(motion) -> dict[str, AngleRange]`: both in one call, whole recording.
 - `measure(motion) -> Measured(series, notes)`: the series of the angles the recording measures
   and, per other angle, why not (``clinical_notes``: a segment the skeleton lacks, or readings
   beyond the body's physiological limits, `LIMITS`).
-- `Norm`, `NORMS`, `norm_for(name)`: normal adult active ranges (AAOS).
+- `Norm`, `NORMS`, `norm_for(name)`: normal adult active ranges (AAOS); `LIMITS`,
+  `limits_for(name)`: what a body can reach; `bounded_amount(name, amount)`: a finding's or
+  correction's amount bounded by that (`physiological_span`, compensations included).
 - `Workspace`, `reachable_workspace(motion, start=None, end=None)`,
   `workspace_from_points(points, side)`: reachable workspace of each hand (relative surface
   area, total and per quadrant, and the hull for a 3D view).
@@ -27,7 +29,15 @@ from analysis.clinical.angles import (
     measure,
 )
 from analysis.clinical.measured import Measured
-from analysis.clinical.norms import LIMITS, NORMS, Norm, limits_for, norm_for
+from analysis.clinical.norms import (
+    LIMITS,
+    NORMS,
+    Norm,
+    bounded_amount,
+    limits_for,
+    norm_for,
+    physiological_span,
+)
 from analysis.clinical.workspace import (
     QUADRANTS,
     Workspace,
@@ -45,10 +55,12 @@ __all__ = [
     "Workspace",
     "angle_ranges",
     "angle_series",
+    "bounded_amount",
     "clinical_angles",
     "limits_for",
     "measure",
     "norm_for",
+    "physiological_span",
     "reachable_workspace",
     "workspace_from_points",
 ]

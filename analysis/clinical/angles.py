@@ -37,10 +37,12 @@ upper arm's axial rotation is read from where the bent forearm points.
   direction about it).
 - ``knee_flexion`` / ``elbow_flexion``: the angle between the two segments' long axes (0 when
   straight; hinge joints, hyperextension is not told apart).
-- ``ankle_dorsiflexion``: the change of the angle between shank and foot from the rest pose's,
-  the one zero taken from the rig: without a heel joint the sole's direction is unknown, and rigs
-  stand flat-footed in their rest pose whatever they do with the arms (so it is left out where
-  the rest shank does not hang within 45° of the vertical).
+- ``ankle_dorsiflexion``: the change of the angle between shank and foot from its value when
+  the person stands (`ankle_zero`): without a heel joint the sole's direction is unknown, and a
+  rig's foot joints sit anywhere along the foot (a Kinect's ankle → foot line points 15–45°
+  down in a standing person, yet 0° in its rest pose), so the zero comes from the recording's
+  own standing frames (knee straight, shank upright over the foot: `standing_frames`); only
+  where the person never stands so, from the rest pose when it stands (else not measured).
 """
 
 from __future__ import annotations
@@ -58,7 +60,7 @@ from analysis.clinical.body import (
     geometry,
     unit,
 )
-from analysis.clinical.measured import Measured, missing_notes, within_limits
+from analysis.clinical.measured import NOT_MEASURABLE, Measured, missing_notes, within_limits
 from analysis.clinical.results import AngleRange
 from analysis.kinematics import Kinematics
 
@@ -188,6 +190,50 @@ def _stands_on(geo: Geometry, shank: str) -> bool:
     return geo.upright and bool(-geo.rest_axes[shank] @ geo.up > MAX_REST_TILT)
 
 
+# Standing on a leg: the knee within STANDING_KNEE_DEG of straight and the shank within
+# STANDING_LEAN_DEG of upright over the foot (forward or backward; leaning sideways, as with the
+# feet set wide, leaves the ankle's bend unchanged); at least MIN_STANDING such frames (a third
+# of a second at 30 fps) to take the ankle's zero from.
+STANDING_KNEE_DEG, STANDING_LEAN_DEG, MIN_STANDING = 15.0, 15.0, 10
+STEADY_FOOT_DEG = 20.0  # the standing foot's 10–90 % spread: beyond it, no zero
+
+
+def standing_frames(geo: Geometry, side: str) -> FloatArray:
+    """Per frame, whether the person stands on this leg (boolean (F,); all False without the
+    thigh, shank and foot)."""
+    parts = [geo.axes.get(f"{p}_{side}") for p in ("thigh", "shank", "foot")]
+    if any(p is None for p in parts):
+        return np.zeros(len(next(iter(geo.axes.values()), ())), dtype=bool)
+    thigh, shank, foot = parts
+    ahead = unit(foot - np.outer(foot @ geo.up, geo.up))  # the way the foot points, level
+    lean = np.degrees(np.arcsin(np.clip(np.sum(-shank * ahead, axis=-1), -1.0, 1.0)))
+    with np.errstate(invalid="ignore"):
+        return (_between(thigh, shank) < STANDING_KNEE_DEG) & (np.abs(lean) < STANDING_LEAN_DEG)
+
+
+def ankle_zero(geo: Geometry, side: str) -> tuple[float | None, str]:
+    """The shank–foot angle (degrees) of this recording's person standing flat-footed (the
+    median over the standing frames; without enough of them, the rest pose's where the rest
+    pose stands), or None and why not: no standing, or a foot whose direction jumps by more
+    than `STEADY_FOOT_DEG` while the person stands (a Kinect foot flipping between two readings:
+    no zero is right then)."""
+    shank, foot = geo.axes[f"shank_{side}"], geo.axes[f"foot_{side}"]
+    standing = standing_frames(geo, side)
+    if standing.sum() >= MIN_STANDING:
+        bends = _between(-shank[standing], foot[standing])
+        low, high = np.nanpercentile(bends, [10.0, 90.0])
+        if high - low > STEADY_FOOT_DEG:
+            return None, (
+                f"the foot's direction jumps by {high - low:.0f}° while the person stands still, "
+                "so its neutral position cannot be told"
+            )
+        return float(np.nanmedian(bends)), ""
+    if _stands_on(geo, f"shank_{side}"):
+        rest = _between(-geo.rest_axes[f"shank_{side}"], geo.rest_axes[f"foot_{side}"])
+        return float(rest), ""
+    return None, "the person never stands with a straight knee in it to measure the foot from"
+
+
 def _limb_angles(geo: Geometry, side: str) -> dict[str, FloatArray]:
     axes, out = geo.axes, {}
     pairs = {"knee_flexion": ("thigh", "shank"), "elbow_flexion": ("upper_arm", "forearm")}
@@ -195,8 +241,8 @@ def _limb_angles(geo: Geometry, side: str) -> dict[str, FloatArray]:
         if f"{a}_{side}" in axes and f"{b}_{side}" in axes:
             out[f"{name}_{side}"] = _between(axes[f"{a}_{side}"], axes[f"{b}_{side}"])
     shank, foot = f"shank_{side}", f"foot_{side}"
-    if shank in axes and foot in axes and _stands_on(geo, shank):
-        neutral = _between(-geo.rest_axes[shank], geo.rest_axes[foot])
+    neutral = ankle_zero(geo, side)[0] if shank in axes and foot in axes else None
+    if neutral is not None:
         out[f"ankle_dorsiflexion_{side}"] = neutral - _between(-axes[shank], axes[foot])
     return out
 
@@ -226,6 +272,16 @@ def angles_of(geo: Geometry) -> dict[str, FloatArray]:
     return {name: out[name] for name in ANGLE_NAMES if name in out}
 
 
+def _ankle_notes(geo: Geometry, given: dict[str, FloatArray]) -> dict[str, str]:
+    """Why an ankle the skeleton has the segments for is not measured (`ankle_zero`)."""
+    out = {}
+    for side in SIDES:
+        name = f"ankle_dorsiflexion_{side}"
+        if name not in given and {f"shank_{side}", f"foot_{side}"} <= set(geo.axes):
+            out[name] = f"{NOT_MEASURABLE}: {ankle_zero(geo, side)[1]}"
+    return out
+
+
 def measure(
     motion: Motion,
     method: str = "orientation",
@@ -240,7 +296,7 @@ def measure(
     geo = geometry(motion, method, kin=kin, body=body)
     raw = angles_of(geo)
     measured = within_limits(raw)
-    notes = {**missing_notes(geo, ANGLE_NAMES, raw), **measured.notes}
+    notes = {**missing_notes(geo, ANGLE_NAMES, raw), **_ankle_notes(geo, raw), **measured.notes}
     return Measured(measured.series, {name: notes[name] for name in ANGLE_NAMES if name in notes})
 
 

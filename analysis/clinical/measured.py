@@ -9,7 +9,12 @@ is the capture losing track of a joint (a Kinect foot, an arm seen edge-on), not
 - more than that, and the whole angle is not measurable in this recording: it is left out, and
   `clinical_notes` says why in plain words (as does every angle the skeleton cannot give).
 
-CONTRACTS.md ``clinical_angles`` / ``clinical_notes``; docs/sections/clinical.md.
+A foot's angle whose frame-to-frame noise alone adds more to its range than a correction's
+tolerance (`analysis.assessment.compensations.jitter` against `NOISY_DEG`: a Kinect foot
+flipping by 40° between frames) is "not measurable reliably in this recording" with that
+reason: no range or correction comes from it.
+
+The interface contract's ``clinical_angles`` / ``clinical_notes``; docs/sections/clinical.md.
 """
 
 from __future__ import annotations
@@ -19,11 +24,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from analysis.assessment.compensations import NOT_RELIABLE, jitter
+from analysis.assessment.findings import TOLERANCE_DEG
 from analysis.clinical.body import SIDES, FloatArray, Geometry
 from analysis.clinical.norms import limits_for
 
 MAX_BEYOND_SHARE = 0.05  # of the tracked frames: more read beyond the limits, no measurement
 NOT_MEASURABLE = "not measurable in this recording"
+# the angles whose noise is checked (Kinect-class feet; other segments' jumps are movement)
+NOISE_CHECKED = ("ankle_dorsiflexion",)
+NOISY_DEG = TOLERANCE_DEG  # the noise alone adds more to a range than a correction tolerates
 # angle (without side) -> the segments it needs: limb axes by name, "pelvis" / "thorax" frames
 NEEDS = {
     "knee_flexion": ("thigh", "shank"),
@@ -90,6 +100,11 @@ def within_limits(series: Mapping[str, FloatArray]) -> Measured:
             notes[name] = f"{NOT_MEASURABLE}: {why}"
         elif beyond.sum() > MAX_BEYOND_SHARE * tracked.sum():
             notes[name] = beyond_note(values[beyond], low, high, beyond.sum() / tracked.sum())
+        elif _base(name) in NOISE_CHECKED and (noise := jitter(values[~beyond])) > NOISY_DEG:
+            notes[name] = (
+                f"{NOT_RELIABLE}: it jumps by about {noise:.0f}° from one frame to the next, "
+                f"more than the {NOISY_DEG:.0f}° a correction would be about"
+            )
         else:
             kept[name] = np.where(beyond, np.nan, values)
     return Measured(kept, notes)

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from analysis.assessment.compensations import LIMIT_DEG, span_of
+
 SOURCE = "AAOS (Greene & Heckman 1994), via Norkin & White 2016"
 
 
@@ -103,3 +105,22 @@ LIMITS: dict[str, tuple[float, float]] = {
 def limits_for(name: str) -> tuple[float, float]:
     """The physiological limits (degrees) of an angle, with or without its side."""
     return LIMITS[norm_for(name).angle]
+
+
+def physiological_span(name: str) -> float:
+    """The most (degrees) a named measure can change by in a body: a clinical angle's whole
+    physiological range (`LIMITS`, with or without its side), or a compensation's
+    (``trunk_rotation``, ``shoulder_hike_left`` …: `analysis.assessment.compensations.REACH`).
+
+    Raises KeyError for a name that is neither."""
+    if any(name.startswith(k) for k in LIMIT_DEG):
+        return span_of(name)
+    low, high = limits_for(name)
+    return high - low
+
+
+def bounded_amount(name: str, amount: float) -> float:
+    """A finding's or correction's amount (degrees of the named angle or compensation) bounded
+    by what the body can do: never more than the measure's `physiological_span`, never below
+    0 (a correction is a size)."""
+    return min(max(float(amount), 0.0), physiological_span(name))

@@ -8,7 +8,7 @@ small next to ``|a|^2 + |b|^2``: its rounding error is at most ``(2 d + 4) u (|a
 bound could exceed ``CELL_RTOL`` of the value is recomputed from the differences, in the same
 order as the reference and from the unscaled features (``w (a - b)^2``: near-identical frames
 lose no digits to the weight scaling). Identical frames therefore still cost exactly 0, and every
-cell is within ``CELL_RTOL`` (relative) of ``analysis.dtw_reference``'s cost.
+cell is within ``CELL_RTOL`` (relative) of ``tests/dtw_reference.py``'s cost.
 
 BLAS runs on one thread (``single_threaded_blas``): the DTW code already runs its cost blocks on a
 second thread or one slice of queries per core, and OpenBLAS's own threads then compete with them

@@ -13,7 +13,7 @@ A frame is a flat feature vector of length ``d``. Cost kinds:
   (``arccos(1 - 1e-16)`` is already 1.5e-8).
 
 ``CostInputs.rows`` is what the DTW code calls for a block of query rows: with 16 features or more
-and at least 8 rows, Euclidean costs come from one matrix product (``analysis.cost_blas``: the
+and at least 8 rows, Euclidean costs come from one matrix product (``analysis.dtw.cost_blas``: the
 ``|a|^2 + |b|^2 - 2 a.b`` expansion on single-threaded BLAS, cells where it could cancel recomputed
 exactly); otherwise from ``cost_rows``, the compiled direct form: Euclidean costs four query frames
 at a time against cache-sized stretches of the reference (each reference value is loaded once for

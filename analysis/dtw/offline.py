@@ -1,7 +1,7 @@
 r"""Dynamic time warping: one ``align(x, y, options)`` for offline, subsequence and Type V DTW.
 
 x (n, d) is the query (rows i), y (m, d) the reference (columns j); ``c(i, j)`` is the local cost
-of ``DTWOptions.cost`` (see ``analysis.frame_costs``), per-joint weights included.
+of ``DTWOptions.cost`` (see ``analysis.dtw.frame_costs``), per-joint weights included.
 
 Symmetric steps (default)::
 
@@ -39,9 +39,9 @@ lengths compete): the Open-End DTW of Tormene et al. used in paper 000. ``Alignm
 it is re-scored by paper 001 eq 17: a run of frames of one sequence matched to a single frame of
 the other counts once, with their mean frame.
 
-Fast paths (numba, in ``analysis.dtw_kernels``) are chosen automatically: local costs computed in
+Fast paths (numba, in ``analysis.dtw.kernels``) are chosen automatically: local costs computed in
 cache-sized row blocks on a second thread while the DP consumes the previous block (Euclidean
-costs with 16 or more features as one matrix product per block, ``analysis.cost_blas``),
+costs with 16 or more features as one matrix product per block, ``analysis.dtw.cost_blas``),
 a vectorised anti-diagonal sweep for closed unbanded distances with few features, two rows of
 memory when no path is wanted, and a batched kernel for many queries against one reference
 (``align_batch`` / ``distance_batch``), one slice of queries per core.
@@ -89,7 +89,7 @@ class DTWOptions:
     """Settings shared by every DTW variant (offline, open-end, streaming, batched).
 
     cost: local cost kind ("euclidean", "sqeuclidean", "quaternion", "geodesic").
-    weights: per-joint weights (J,), see ``analysis.frame_costs``; None means all ones.
+    weights: per-joint weights (J,), see ``analysis.dtw.frame_costs``; None means all ones.
     window: Sakoe-Chiba half-width in frames (see the band above); None means no band.
     open_begin / open_end: the path may start / end anywhere along y (subsequence, open-end DTW).
     path_length_weighting: predecessor choice by mean path cost (paper 000, eq 3).

@@ -1,6 +1,6 @@
 """Feedback in words from assessed landmarks (thesis 004 §7.2.4, Algorithms 8–10, Appendix E).
 
-An exercise's *assessment grammar* (syntax in :mod:`analysis.feedback_grammar`) lists rules such as
+An exercise's *assessment grammar* (syntax in :mod:`analysis.feedback.grammar`) lists rules such as
 ``type$2 & @LEFT_KNEE$3 -> F:"Your left knee needs to be bent much more", T:"Try ducking lower"``.
 For every assessed landmark (frame, landmark type, level per joint) the rules whose condition holds
 give feedback texts and tips (Algs 8–9); :meth:`Grammar.comments` turns them into one spoken

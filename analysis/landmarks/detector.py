@@ -156,7 +156,7 @@ class LandmarkDetector(ClassifierMixin, BaseEstimator):
     extra_features: also give the classifier the signature values at the frame (the pose), an
     addition to the thesis's features; ends: count the recording's first and last frames as
     extrema instead of leaving their features unknown, strict: nearest extrema strictly before and
-    after the frame (both see `analysis.features.frame_features`); near: share of
+    after the frame (both see `analysis.landmarks.features.frame_features`); near: share of
     the negatives drawn close to the landmarks (see `training_frames`).
     """
 

@@ -152,7 +152,7 @@ def _detector(opts: LandmarkOptions) -> LandmarkDetector:
 
 def tutor_cycle(types: npt.ArrayLike) -> list[int]:
     """One repetition's landmark types in the tutor: up to the return of its first type, e.g.
-    [1, 2] for 1, 2, 1, 2, …, 1 (the order `analysis.repetitions` expects)."""
+    [1, 2] for 1, 2, 1, 2, …, 1 (the order `analysis.landmarks.repetitions` expects)."""
     t = np.asarray(types, dtype=np.int64)
     again = np.flatnonzero(t[1:] == t[0])
     return [int(v) for v in t[: int(again[0]) + 1 if again.size else t.size]]
@@ -282,7 +282,8 @@ def periodic_landmarks(
     """Chapter 6 on detected landmarks: keep the members `analysis.periodic.clean` keeps.
 
     patterns: training periods (``LandmarkModel.patterns_``, e.g. [[1, 2, 1]]); method: one of
-    `analysis.periodic.METHODS` (GA^K by default). Returns the kept landmarks, in time order.
+    `analysis.periodic.sequence.METHODS` (GA^K by default). Returns the kept landmarks, in time
+    order.
     """
     if landmarks.frames.size == 0:
         return landmarks
@@ -296,7 +297,8 @@ def periodic_landmarks(
 class RepetitionResult:
     """Everything `landmark_repetitions` found in one performance: the detection stages
     (``detection``), the landmarks after periodic analysis (``landmarks``) and the repetitions
-    (`analysis.repetitions.Repetition`: start, end-of-range frames, end, complete, cycle)."""
+    (`analysis.landmarks.repetitions.Repetition`: start, end-of-range frames, end, complete,
+    cycle)."""
 
     detection: LandmarkResult
     landmarks: KeyPoses
@@ -313,10 +315,11 @@ def landmark_repetitions(
 ) -> RepetitionResult:
     """Entry point for segmentation (item 7 of issue 4): repetitions of a performance from its key
     poses — `LandmarkModel.detect`, periodic sequence analysis (`periodic_landmarks`, skipped when
-    ``method`` is None), then `analysis.repetitions.repetitions` with the tutor's cycle.
+    ``method`` is None), then `analysis.landmarks.repetitions.repetitions` with the tutor's cycle.
 
     model: a fitted `LandmarkModel` of the exercise; motion: the performance (the tutor's fps).
-    order: the cycles of `analysis.repetitions` (default ``model.cycle_``, e.g. [1, 2]); give one
+    order: the cycles of `analysis.landmarks.repetitions` (default ``model.cycle_``, e.g. [1, 2]);
+    give one
     cycle per side (``[[1, 2], [3, 4]]``) when the tutor's landmarks have a type set per side, and
     repetitions are matched by type so patients may do the sides in another order. Incomplete
     repetitions (missing start or end of range, cut short by the recording's end) and extra ones

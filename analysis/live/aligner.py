@@ -13,9 +13,10 @@ Per frame (O(m) work, m the tutor repetition's length):
   Each repetition is then aligned with the tutor's gesture by GB-DTW (paper 001: its score and
   Table 1's guidance, ``gesture_guidance``), scored by the exercise model's scorer and given
   the guidance the offline pipeline gives (``guidance``: Table 1 on the repetition's WOOE-DTW
-  alignment with a tutor repetition, `analysis.pipeline.gestures`), so a patient hears live
-  what the recording's page later says. ``passed``: its score reached the model's pass mark;
-  ``words``: what the page shows and speaks (`repetition_words`: praise only when passed).
+  alignment with a tutor repetition, `analysis.pipeline.gestures`) and judged by the offline
+  judgement (`analysis.live.judged`: ``passed``, the guidance kept, ``reasons``), so a patient
+  hears live what the recording's page later says; ``words``: what the page shows and speaks
+  (`repetition_words`: its first reason, praise only when passed without one).
 
 Frames are the recording's own BVH channel values; joints are mapped onto the model's once, and
 a stream faster than the model's frame rate is thinned to it (slower streams are used as is).
@@ -30,13 +31,13 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from analysis.assessment import repetition_features
 from analysis.bvh import Skeleton, map_joints
 from analysis.dtw import DTWOptions
-from analysis.kinematics import flatten, positions, relative_to_start
+from analysis.kinematics import positions
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics.forward_kinematics import UP_AXIS
-from analysis.live.words import GUIDANCE_TEXT, Event, repetition_words
+from analysis.live.judged import RepetitionJudge, guidance_events
+from analysis.live.words import Event, repetition_words
 from analysis.online.aligners import ForwardPlotAligner, ForwardPlotOptions, OpenEndAligner
 from analysis.online.counting import Counted, RepetitionCounter
 from analysis.online.frames import FrameKinematics
@@ -50,8 +51,8 @@ from analysis.pipeline.gestures import (
     usual_pace,
 )
 from analysis.pipeline.model import FittedModel
-from analysis.pipeline.prepare import mirrored
 from analysis.pipeline.repetition_stage import RULES
+from analysis.pipeline.results import Guidance
 
 FloatArray = npt.NDArray[np.float64]
 IndexArray = npt.NDArray[np.intp]
@@ -108,6 +109,7 @@ class LiveAligner:
         self._due = 0.0
         self._setup_tutor()
         self._setup_aligners()
+        self._judge = RepetitionJudge(model, skeleton)
         self.frames = 0  # stream frames pushed
         self.repetitions: list[Event] = []
         self.latencies_ms: list[float] = []
@@ -181,7 +183,9 @@ class LiveAligner:
             return []
         started, cpu = time.perf_counter(), time.thread_time()
         self._due += self._period
-        q = self._features(np.asarray(values, dtype=np.float64))
+        row = np.asarray(values, dtype=np.float64)
+        q = self._features(row)
+        self._judge.add(row)
         self._frame_of.append(seq)
         if self._choose_side():
             self._restart_playback()
@@ -314,30 +318,37 @@ class LiveAligner:
         progress = np.asarray(self._progress[side][a : b + 1])
         reach = float(progress.max() - progress[0])
         start, end = self._frame_of[a], self._frame_of[b]
-        tempo = (b - a + 1) / self._tutor_q.shape[0]
+        tempo = (b - a + 1) / self._reference_frames  # as offline: the tutor's median repetition
         user = np.asarray(self._q[side][a : b + 1])
         gesture = _gesture(self._tutor_q, user, user, index=len(self.repetitions), a0=0, u0=a,
                            opt=self._gb)  # fmt: skip
-        score = round(self._score(a, b, side), 2)
-        threshold = float(self.model.components.papers.threshold.value)
-        tips = self._guidance(a, b, len(self.repetitions))
+        score = round(self._judge.score(a, b, bool(side), self._index), 2)
+        number = len(self.repetitions) + 1
+        found = self._guidance(a, b, len(self.repetitions))
+        self._judge.set_side(bool(side))
+        verdict = self._judge.judge(
+            a, b, number, score, found, reach, round(tempo, 3), self.options.own_pace
+        )
         event = {
             "event": "repetition",
-            "index": len(self.repetitions),
+            "index": number - 1,
             "start": start,
             "end": end,
             "score": score,
-            "passed": bool(score >= threshold),
-            "guidance": tips,
+            "passed": verdict.passed,
+            "guidance": guidance_events(
+                found, verdict, [self._frame_of[min(b, a + f)] for f in range(b - a + 1)]
+            ),
+            "reasons": list(verdict.reasons),
             "gesture_guidance": list(gesture.guidance),
             "reach": round(reach, 3),
             "tempo": round(tempo, 3),
         }
-        event["words"] = repetition_words(event, threshold)
+        event["words"] = repetition_words(event)
         self.repetitions.append(event)
         return event
 
-    def _guidance(self, a: int, b: int, index: int) -> list[Event]:
+    def _guidance(self, a: int, b: int, index: int) -> tuple[Guidance, ...]:
         """Table 1's guidance for model-rate frames a..b, by the offline pipeline's own rule
         (`analysis.pipeline.gestures.guidance` on the repetition's WOOE-DTW alignment with a
         tutor repetition, its tempo and reach against the reference's and the patient's own),
@@ -354,27 +365,7 @@ class LiveAligner:
         self._paces.append(pace)
         own = self.options.own_pace or usual_pace(self._paces)
         found = guidance(aligned, series, pace, own, RULES)
-        return [
-            {
-                "type": g.type,
-                "frames": [self._frame_of[min(b, a + step * f)] for f in g.frames],
-                "text": GUIDANCE_TEXT.get(g.type, ""),
-            }
-            for g in found
-        ]
-
-    def _score(self, a: int, b: int, side: int) -> float:
-        """The exercise model's repetition score of model-rate frames a..b (0-100), scored as
-        the tutor's side when the patient used the other one (as offline)."""
-        parts = self.model.components
-        points = np.asarray(self._points[a : b + 1])
-        if side:
-            points = mirrored(points, parts.mirror)
-        points = points[:, parts.scored_index]
-        segment = relative_to_start(flatten(points))
-        step = parts.scoring_step
-        features = repetition_features(segment[::step], [t[::step] for t in parts.templates])
-        return float(parts.scorer.score(features))
+        return tuple(Guidance(g.type, (step * g.frames[0], step * g.frames[1])) for g in found)
 
 
 def _grounded(points: FloatArray) -> FloatArray:

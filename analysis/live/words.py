@@ -1,30 +1,23 @@
-"""What a live session says to the patient: each piece of guidance in plain words, and the
-sentence read (and spoken) when a repetition ends."""
+"""What a live session says to the patient when a repetition ends: the first of the reasons its
+judgement gives (`analysis.pipeline.judgement`, the same judgement as the offline analysis of the
+same frames), or "well done" for a repetition that passed without one."""
 
 from __future__ import annotations
 
 from typing import Any
 
 Event = dict[str, Any]
-GUIDANCE_TEXT = {
-    "too fast": "Slow down: take as long as the tutor.",
-    "too slow": "A little faster: keep the tutor's pace.",
-    "overdone": "Not so far: stop where the tutor stops.",
-    "incomplete": "Go further: reach the tutor's end position.",
-}
 
 
-def repetition_words(event: Event, threshold: float) -> str:
-    """What the patient reads (and hears) when a repetition ends: "well done" only for one that
-    passed without a tip; a tip when there is one; a failed repetition without a tip is told its
-    score against the pass mark, so it always hears why it was not praised."""
+def repetition_words(event: Event, threshold: float | None = None) -> str:
+    """What the patient reads (and hears) when a repetition ends: its first reason (a failed
+    repetition always has one; a passed one may have a tip), else "well done" for a passed one.
+    ``threshold``: kept for callers of the old signature (a score is not a reason)."""
     number = event["index"] + 1
-    tips = [g["text"] for g in event["guidance"] if g.get("text")]
-    if tips:
-        return f"Repetition {number}: {tips[0]}"
+    reasons = list(event.get("reasons") or ())
+    reasons += [g["text"] for g in event.get("guidance", ()) if g.get("text")]
+    if reasons:
+        return f"Repetition {number}: {reasons[0]}"
     if event["passed"]:
         return f"Repetition {number}: well done."
-    return (
-        f"Repetition {number}: not counted as done well: score {event['score']:.0f}, "
-        f"{threshold:.0f} passes."
-    )
+    return f"Repetition {number}: not done as the demonstration: watch it and follow its movement."

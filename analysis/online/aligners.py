@@ -14,7 +14,8 @@ never goes backwards, so a tutor played back through it never jumps back in time
 - C: same forecast, costs accumulated backwards from the forecast's far end; the newest frame goes
   to the argmin of the first column.
 
-Corrections from SPEC.md: the forecast extrapolates forwards from the velocity over the last
+Corrections from the project's specification: the forecast extrapolates forwards from the velocity
+over the last
 ``history`` (4-8) frames; C's path may end anywhere in the last forecast column. With
 ``DTWOptions(step="type-v")`` the Type V constraint of 003 ch. 6 (Table 6.3) limits each step:
 state A allows 0-3 reference frames forward, B (after one repeat) 0-1, C (after two) exactly 1.

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -53,11 +53,15 @@ TAU_PAIRS = 96
 class GuidanceRules:
     """When a repetition gets each kind of guidance. Bands (too fast below, too slow above,
     incomplete below, overdone above) on the ratios to the reference's tempo and reach:
-    ``reference`` in a first session, the wider ``known_reference`` once an earlier session's
-    pace is known (that pace then says what is usual for this patient); ``own``: on the ratios
-    to the patient's usual pace (`Pace`)."""
+    ``reference`` in a first session, and for tempo always; for reach, the wider
+    ``known_reference`` once an earlier session's pace is known (that pace then says what is
+    usual for this patient); ``own``: on the ratios to the patient's usual pace (`Pace`). The
+    tempo band: on UI-PRMD's development subjects, correct takes last 0.6–2.0 times the tutor's
+    repetition (median 1.19), so no band both names every ×0.6 / ×1.6 take and leaves every
+    unmodified one alone; 0.85 / 1.55 names about 84 % / 82 % of them and leaves 86 % of
+    unmodified repetitions (docs/EVALUATION.md, "One judgement per repetition")."""
 
-    reference: tuple[float, float, float, float] = (0.65, 1.8, 0.55, 1.6)
+    reference: tuple[float, float, float, float] = (0.85, 1.55, 0.55, 1.6)
     known_reference: tuple[float, float, float, float] = (0.4, 3.0, 0.3, 3.0)
     own: tuple[float, float, float, float] = (0.75, 1.3, 0.7, 1.12)
     min_run: int = 2
@@ -195,19 +199,36 @@ def reach_series(q: FloatArray, mirror_q: FloatArray, reference: FloatArray) -> 
 def pace_guidance(pace: Pace, own: Pace | None, rules: GuidanceRules) -> list[tuple[str, float]]:
     """The one tempo and reach rule (offline and live): the types that apply, each with how far
     past its threshold the repetition is (> 1), most pressing first; ``own``: the patient's usual
-    pace (None: judged against the reference alone)."""
+    pace (None: judged against the reference alone).
+
+    Tempo (paper 001, issue 34): the repetition's duration over the reference's, against the
+    reference's band whether or not an earlier session is known (a 1.6× change is never hidden
+    by a patient's usual pace, which only softens the words: `usual_for_patient`); and against
+    the patient's usual tempo, in the direction away from the reference only (a repetition
+    slower than usual but quicker than the demonstration is not told to speed up). Reach against
+    both too, its reference band widened once an earlier session says what is usual for this
+    patient (both directions may apply: `analysis.pipeline.judgement` keeps one per axis)."""
     mine = own or Pace(1.0, 1.0)
-    fast, slow, short, far = rules.known_reference if mine.earlier else rules.reference
+    fast, slow = rules.reference[:2]
+    short, far = (rules.known_reference if mine.earlier else rules.reference)[2:]
     own_fast, own_slow, own_short, own_far = rules.own
     tempo, reach = max(pace.tempo, 1e-9), max(pace.reach, 1e-3)
     my_tempo, my_reach = tempo / max(mine.tempo, 1e-9), reach / max(mine.reach, 1e-9)
     past = {
-        "too fast": max(fast / tempo, own_fast / my_tempo),
-        "too slow": max(tempo / slow, my_tempo / own_slow),
+        "too fast": max(fast / tempo, own_fast / my_tempo) if tempo < 1.0 else 0.0,
+        "too slow": max(tempo / slow, my_tempo / own_slow) if tempo > 1.0 else 0.0,
         "incomplete": max(short / reach, own_short / my_reach),
         "overdone": max(reach / far, my_reach / own_far),
     }
     return sorted(((k, v) for k, v in past.items() if v > 1.0), key=lambda item: -item[1])
+
+
+def usual_for_patient(kind: str, own: Pace | None, rules: GuidanceRules) -> bool:
+    """Whether a guidance type is what this patient usually does (an earlier session's usual
+    pace is past the reference's band the same way), so its words may be softer."""
+    if own is None or not own.earlier:
+        return False
+    return kind in dict(pace_guidance(replace(own, earlier=False), None, rules))
 
 
 def repetition_pace(

@@ -32,8 +32,10 @@ from analysis.pipeline.model_fit import (
 from analysis.pipeline.tutor_parts import TutorParts, fit_tutor_parts
 
 # 3: one calibrated score scale (pass at 70), corrections; 4: tutor-distance scale;
-# 5: the parsed grammar and the tutor's parts (`tutor_parts`) stored with the model
-FORMAT_VERSION = 6
+# 5: the parsed grammar and the tutor's parts (`tutor_parts`) stored with the model;
+# 6: key poses in one form; 7: the reference leaves out what the exercise trains (a trunk
+# rotation's turn is never checked as a compensation), and the judgement's inputs
+FORMAT_VERSION = 7
 MAGIC = b"PHYSIO-MODEL\n"
 FloatArray = npt.NDArray[np.float64]
 Progress = Callable[[str, float], None]

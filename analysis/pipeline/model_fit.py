@@ -1,6 +1,7 @@
 """Fitting the parts of an exercise model from the tutor (and labelled recordings).
 
-Kept apart from `analysis.model` (the container and its file format) so that each fitted part is
+Kept apart from `analysis.pipeline.model` (the container and its file format) so that each fitted
+part is
 one small function: involved joints, progress axis, repetition templates, score calibration.
 """
 

@@ -50,15 +50,23 @@ class Prepared:
 
 def check_length(motion: Motion, rep_frames: float, model_fps: float) -> None:
     """Refuse a recording shorter than half the tutor's repetition: quick movements are real
-    repetitions, so the bar follows the exercise, not a fixed time."""
-    seconds = motion.duration
-    needed = 0.5 * rep_frames / model_fps
-    if motion.n_frames < 4 or seconds < needed:
-        lasts, least = distinct_durations(seconds, needed)
-        raise RecordingTooShortError(
-            f"The recording lasts {lasts} ({motion.n_frames} frames); at least "
-            f"{least} are needed to hold one repetition."
-        )
+    repetitions, so the bar follows the exercise, not a fixed time. The bar is compared in whole
+    frames of the recording (rounded up, with a float tolerance): two times computed differently
+    (0.633327 s and 0.633333 s) are never compared or printed as if they differed."""
+    needed_frames = max(4, min_frames(0.5 * rep_frames / model_fps, motion.frame_time))
+    if motion.n_frames >= needed_frames:
+        return
+    lasts, least = distinct_durations(motion.duration, needed_frames * motion.frame_time)
+    raise RecordingTooShortError(
+        f"The recording lasts {lasts} ({motion.n_frames} frames); at least {least} "
+        f"({needed_frames} frames) are needed to hold one repetition."
+    )
+
+
+def min_frames(seconds: float, frame_time: float) -> int:
+    """Frames of ``frame_time`` needed to last ``seconds``; a bar within a thousandth of a frame
+    of a whole number of frames is that number (times rounded by a file's frame time)."""
+    return int(np.ceil(seconds / frame_time - 1e-3))
 
 
 def prepare(

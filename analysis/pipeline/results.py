@@ -1,7 +1,8 @@
 """Typed results of the pipeline's stages, and their JSON form at the boundary.
 
 Every stage of `analysis.pipeline.run` returns one of these frozen objects; `AnalysisSummary`
-gathers them for one recording. ``to_json`` gives the fields of ``analyse --json`` (CONTRACTS.md)
+gathers them for one recording. ``to_json`` gives the fields of ``analyse --json`` (the interface
+contract)
 and ``from_json`` reads them back (tolerating fields that older runs did not store), so the web
 app and the workers read a stored result through these classes, never by string key.
 """
@@ -105,6 +106,9 @@ class RepetitionResult:
     # paper 001's reach: the involved joints' angular excursion over the tutor's (1 = as far);
     # with tempo, what a later session's pace is judged against (None in older runs)
     excursion: float | None = None
+    # the sentences the patient reads for this repetition (`analysis.pipeline.judgement`): never
+    # empty when it failed; empty in runs stored before them
+    reasons: tuple[str, ...] = ()
 
     @property
     def main_guidance(self) -> str:
@@ -118,7 +122,7 @@ class RepetitionResult:
             "tempo": self.tempo, "guidance": [g.to_json() for g in self.guidance],
             "gbdtw_score": self.gbdtw_score, "alignment_tau": self.alignment_tau,
             "similarity": self.similarity, "excursion": self.excursion,
-            **_angles_json(self.clinical_angles),
+            "reasons": list(self.reasons), **_angles_json(self.clinical_angles),
         }  # fmt: skip
 
     @classmethod
@@ -138,6 +142,7 @@ class RepetitionResult:
             similarity=_optional_float(data.get("similarity")),
             clinical_angles=_angles_from_json(data.get("clinical_angles")),
             excursion=_optional_float(data.get("excursion")),
+            reasons=tuple(str(t) for t in data.get("reasons") or ()),
         )
 
 
@@ -231,7 +236,8 @@ class AnalysisSummary:
     segmentation: str | None = "landmarks"
     periodic: PeriodicSummary = field(default_factory=PeriodicSummary)
     pass_threshold: float = 70.0  # on the 0–100 scale; the same on every exercise since issue 17
-    # anatomical name (CONTRACTS.md, e.g. "knee_flexion_left") -> its range over the recording
+    # anatomical name (the interface contract, e.g. "knee_flexion_left") -> its range over the
+    # recording
     clinical_angles: Mapping[str, AngleRange] = field(default_factory=dict)
     # "left" / "right" -> reachable workspace of that hand; only for exercises of the arms
     workspace: Mapping[str, WorkspaceSummary] = field(default_factory=dict)

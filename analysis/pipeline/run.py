@@ -3,9 +3,10 @@
 
 ``analyse(motion, model, history=None, on_progress=None)`` is a pure function of its inputs. It
 returns a frozen `AnalysisResult` whose ``to_json()`` holds the fields of ``analyse --json``
-(CONTRACTS.md) and more, and whose ``arrays()`` holds the per-frame data for playback. Progress is
+(the interface contract) and more, and whose ``arrays()`` holds the per-frame data for playback.
+Progress is
 reported as ``on_progress(stage, fraction)``. Bad input raises a subclass of
-`analysis.errors.AnalysisInputError` with a message a therapist can read.
+`analysis.bvh.errors.AnalysisInputError` with a message a therapist can read.
 
 It runs in four phases, each returning a frozen result: `find_repetitions` (`Found`: stages
 prepare … match), `score` (`Scored`: synchronisation … performance_level, only for a recording
@@ -32,9 +33,11 @@ from analysis.bvh.plausibility import DEFAULT_LIMITS, Limits
 from analysis.clinical import Measured, angle_ranges, measure
 from analysis.feedback import Comment, LandmarkAssessment
 from analysis.feedback.advice import Advice
-from analysis.pipeline.advice_stage import plain_errors_fail
+from analysis.pipeline.advice_stage import judge_repetitions
 from analysis.pipeline.clinical_stage import repetition_angles, workspace_summaries
+from analysis.pipeline.curves import angle_curves
 from analysis.pipeline.gestures import Pace
+from analysis.pipeline.judgement import Judgement
 from analysis.pipeline.keyposes import KeyPoseRepetitions, key_pose_repetitions, periodic_analysis
 from analysis.pipeline.match import MatchContext, check_fit
 from analysis.pipeline.model import FittedModel
@@ -75,7 +78,8 @@ class AnalysisResult:
     playback: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
-        """A JSON-ready dict with the CONTRACTS.md fields (frames, fps, landmarks, repetitions,
+        """A JSON-ready dict with the interface contract's fields (frames, fps, landmarks,
+        repetitions,
         score, assessment, feedback, timings_ms) plus metrics, gamma and range_of_motion."""
         return self.summary.to_json()
 
@@ -130,19 +134,21 @@ class Scored:
     assessment: tuple[LandmarkAssessment, ...] = ()
     repetitions: tuple[RepetitionResult, ...] = ()
     gamma: dict[str, float] = field(default_factory=dict)
+    own_pace: Pace | None = None  # the patient's usual pace from an earlier session
 
 
 @dataclass(frozen=True, eq=False)
 class Measures:
     """Phase 3, measuring (adjustment, clinical_angles): the playback arrays, the clinical
     angles (series and ranges, and why an angle is missing), the compensations, and the
-    repetitions with their angle ranges (a plain error failing its repetition)."""
+    repetitions with their angle ranges, each judged once (`analysis.pipeline.judgement`)."""
 
     playback: dict[str, npt.NDArray[Any]]
     measured: Measured
     angles: dict[str, AngleRange]
     compensations: dict[str, FloatArray]
     repetitions: tuple[RepetitionResult, ...]
+    judged: tuple[Judgement, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,7 +185,7 @@ def analyse(
     if on_progress is not None:
         on_progress("done", 1.0)
     summary = _summary(found, scored, (measures, explained), model, timer)
-    return AnalysisResult(summary, measures.playback)
+    return AnalysisResult(summary, {**measures.playback, **angle_curves(measures.measured)})
 
 
 def find_repetitions(
@@ -241,7 +247,7 @@ def score(
         )
     with timer("performance_level"):
         gamma = performance_level(assessment, history)
-    return Scored(assessment, repetitions, gamma)
+    return Scored(assessment, repetitions, gamma, own_pace)
 
 
 def measure_recording(
@@ -259,9 +265,11 @@ def measure_recording(
         angles = angle_ranges(measured.series)
         series = compensations(kin.positions, body) if found.fit.fits else {}
         repetitions = repetition_angles(measured.series, scored.repetitions)
-        # a plain error (a main angle far short, a trunk lean held) fails its repetition
-        repetitions = plain_errors_fail(repetitions, model, found.used_mirror, series)
-    return Measures(playback, measured, angles, series, repetitions)
+        # one judgement per repetition: its verdict (a plain error fails it), guidance, reasons
+        repetitions, judged = judge_repetitions(
+            repetitions, model, found.used_mirror, series, scored.own_pace
+        )
+    return Measures(playback, measured, angles, series, repetitions, judged)
 
 
 def explain(
@@ -274,7 +282,7 @@ def explain(
         if found.fit.fits:
             advice, feedback = feedback_items(
                 measures.repetitions, scored.assessment, model, found.used_mirror,
-                measures.compensations,
+                measures.compensations, measures.judged,
             )  # fmt: skip
         else:  # the exercise's own parts left (nearly) still: say which
             still = found.fit.looks_like is None

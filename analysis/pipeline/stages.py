@@ -12,20 +12,27 @@ import numpy.typing as npt
 
 from analysis.adjustment import Performance, demonstration_skeletons, gamma_vector
 from analysis.assessment import landmark_features, repetition_features, update_levels
-from analysis.assessment.findings import findings, swapped_side, tutor_ranges, tutor_spreads
+from analysis.assessment.findings import findings, tutor_ranges, tutor_spreads
 from analysis.assessment.joints import N_LEVELS
 from analysis.assessment.limbs import arm_first
 from analysis.assessment.scoring import MISSED_CAP, missed_key_pose
 from analysis.clinical import angle_ranges, angle_series
-from analysis.clinical.labels import angle_part
 from analysis.feedback import Comment, Grammar, LandmarkAssessment
 from analysis.feedback.advice import MAX_CORRECTIONS, Advice, advise
 from analysis.feedback.text import correction_rules
 from analysis.kinematics import flatten, range_of_motion, relative_to_start
 from analysis.kinematics import quaternions as quat
 from analysis.landmarks import KeyPoses, Segments
-from analysis.pipeline.advice_stage import recording_passed, repetition_measures, tutor_reference
+from analysis.pipeline.advice_stage import (
+    main_part,
+    recording_passed,
+    repetition_measures,
+    tutor_reference,
+    unnamed_failures,
+)
+from analysis.pipeline.judgement import Judgement
 from analysis.pipeline.model import FittedModel
+from analysis.pipeline.model_fit import ModelComponents
 from analysis.pipeline.prepare import Prepared, in_model_order
 from analysis.pipeline.repetition_stage import GestureResult
 from analysis.pipeline.results import KeyPose, RepetitionResult
@@ -57,6 +64,19 @@ def _closest_type(prepared: Prepared, frame: int, types: list[int], model: Fitte
     return types[int(np.argmin(costs))]
 
 
+def scoring_features(
+    points: FloatArray, start: int, end: int, parts: ModelComponents
+) -> FloatArray:
+    """The features the exercise's scorer scores a repetition by, from frames start..end of the
+    recording's (F, J, 3) scaled positions (`scaled_positions`; the tutor's side): the movement
+    of the scored joints since the repetition began against the tutor's repetitions. Offline and
+    live (`analysis.live.judged`) alike."""
+    movement = flatten(np.take(points[start : end + 1], parts.scored_index, axis=1))
+    step = parts.scoring_step
+    segment = relative_to_start(movement)
+    return repetition_features(segment[::step], [t[::step] for t in parts.templates])
+
+
 def repetition_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds them)
     prepared: Prepared,
     segments: Segments,
@@ -70,15 +90,12 @@ def repetition_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds th
     key pose the per-joint assessment finds clearly missed scores below the pass threshold."""
     parts = model.components
     threshold = parts.papers.threshold.value
-    movement = flatten(np.take(prepared.points, parts.scored_index, axis=1))
     tutor_frames = float(np.median([len(t) for t in parts.templates]))
-    step = parts.scoring_step
     out = []
     for k, (start, end, peak) in enumerate(
         zip(segments.starts, segments.ends, segments.peaks, strict=True)
     ):
-        segment = relative_to_start(movement[start : end + 1])
-        features = repetition_features(segment[::step], [t[::step] for t in parts.templates])
+        features = scoring_features(prepared.points, int(start), int(end), parts)
         dev = features[: len(parts.scored_index)]
         score = parts.scorer.score(features)
         inside = [a.levels for a in assessment if start < a.frame <= end and a.type != 1]
@@ -127,33 +144,27 @@ def tutor_angle_ranges(model: FittedModel) -> tuple[dict[str, float], dict[str, 
     return tutor_ranges(per_repetition), tutor_spreads(per_repetition)
 
 
-def main_part(tutor: Mapping[str, float]) -> str:
-    """What the tutor moves most, in plain words ("both arms", "left knee", "trunk")."""
-    if not tutor:
-        return "body"
-    top = max(tutor, key=lambda k: tutor[k])
-    other = tutor.get(swapped_side(top), 0.0)
-    if other != tutor[top] and other >= 0.7 * tutor[top]:
-        return angle_part(top).split(" ", 1)[1] + "s"  # "elbows": both sides move
-    return angle_part(top)
-
-
-def feedback_items(
+def feedback_items(  # noqa: PLR0917 (the stage's inputs, as run.py holds them)
     repetitions: tuple[RepetitionResult, ...],
     assessment: tuple[LandmarkAssessment, ...],
     model: FittedModel,
     mirrored: bool,
     series: Mapping[str, FloatArray] | None = None,
+    judged: Sequence[Judgement] = (),
 ) -> tuple[Advice, tuple[Comment, ...]]:
     """The corrections and what went well (`analysis.feedback.advice`), said by the exercise's
     grammar; and the feedback list: the corrections at the frame where each first happened,
     then, for an older grammar written per key pose, its comments with repeats left out;
-    ``series``: the recording's compensations (`analysis.pipeline.tutor_parts.compensations`)."""
+    ``series``: the recording's compensations (`analysis.pipeline.tutor_parts.compensations`);
+    ``judged``: each repetition's judgement (`advice_stage.judge_repetitions`): a failed
+    repetition no correction names gets one of its own (`advice_stage.unnamed_failures`)."""
     grammar = model.rules
     reference = tutor_reference(model)
     measures = repetition_measures(repetitions, series)
     passed = recording_passed(repetitions, model)
     found = arm_first(findings(measures, reference, mirrored, passed=passed))
+    if judged:
+        found = unnamed_failures(found, judged, [r.start for r in repetitions])
     # the default sentences say what a grammar written before a kind of finding has no rule for
     fallback = Grammar(tuple(correction_rules()))
     advice = advise(grammar, found, len(repetitions), main_part(reference.ranges), fallback)

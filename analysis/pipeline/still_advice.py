@@ -25,9 +25,8 @@ from analysis.assessment.limbs import arm_first
 from analysis.feedback import Grammar
 from analysis.feedback.advice import MAX_CORRECTIONS, Advice, Correction, direction_of, fields, say
 from analysis.feedback.text import correction_rules
-from analysis.pipeline.advice_stage import tutor_reference
+from analysis.pipeline.advice_stage import main_part, tutor_reference
 from analysis.pipeline.model import FittedModel
-from analysis.pipeline.stages import main_part
 
 FloatArray = npt.NDArray[np.float64]
 STILL_SHARE = PLAIN_SHARE  # an involved angle covering less of the tutor's range: left out

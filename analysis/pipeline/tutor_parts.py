@@ -18,7 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.adjustment import Performance
-from analysis.assessment.compensations import compensation_series, stretch
+from analysis.assessment.compensations import compensation_series, stretch, trained
 from analysis.assessment.findings import Reference, involved_angles, tutor_ranges, tutor_spreads
 from analysis.bvh import Motion, Skeleton
 from analysis.clinical import angle_ranges, measure
@@ -127,9 +127,12 @@ def reference_of(
     ticked, spread = ticked_joints(tutor.skeleton, involved_joints), tutor_spreads(ranges)
     involved = involved_angles(tutor_ranges(ranges), ticked, spread)
     moved = involved_angles(tutor_ranges(ranges), ticked)  # a plain error's main angles
-    for k, (extent, middle) in enumerate(stretches(compensations(kin.positions, body), bounds)):
-        ranges[k] = {**ranges[k], **extent}
-        middles[k] = {**middles[k], **middle}
+    measured = stretches(compensations(kin.positions, body), bounds)
+    # what the exercise itself moves (a trunk rotation's turn) is never checked as a compensation
+    own = trained(tutor_ranges([extent for extent, _ in measured]))
+    for k, (extent, middle) in enumerate(measured):
+        ranges[k] = {**ranges[k], **{n: v for n, v in extent.items() if n not in own}}
+        middles[k] = {**middles[k], **{n: v for n, v in middle.items() if n not in own}}
     return Reference(
         tutor_ranges(ranges), tutor_spreads(ranges), tutor_ranges(middles), involved, moved
     )  # fmt: skip

@@ -1,6 +1,6 @@
 """Fast motion retrieval with 2-bit quantised PCA features (paper 002, Takahara et al.).
 
-Every frame's 17 body-part distances (`analysis.retrieval_features`) are projected on the first n
+Every frame's 17 body-part distances (`analysis.retrieval.features`) are projected on the first n
 principal components of a training collection; each coefficient a_i becomes a 2-bit level g_i by
 its training mean μ_i and standard deviation σ_i (eq 1), and the n levels are packed into one
 integer code m = Σ g_i·4^(i−1) in [0, 4^n) (eq 2). Two codes are compared by
@@ -219,7 +219,7 @@ def _many_features(query: np.ndarray, feats_t: np.ndarray, offsets: np.ndarray) 
 class MotionRetriever:
     """Nearest-neighbour motion retrieval over a labelled collection of recordings (paper 002).
 
-    Recordings are (F, 17) feature sequences from `analysis.retrieval_features.recording_features`
+    Recordings are (F, 17) feature sequences from `analysis.retrieval.features.recording_features`
     at `frame_rate` frames per second (`features_from_positions` does that from positions).
     Learned attributes are plain numpy arrays, so the estimator pickles; the 4^n × 4^n table is
     rebuilt on first use instead of being stored (64 MB for n = 6).

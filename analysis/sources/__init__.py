@@ -1,5 +1,6 @@
-"""Capture sources other than BVH: Kinect and Azure Kinect joint positions, ``.trc`` and C3D
-marker files, MediaPipe landmarks, each turned into a `Motion` by one inverse kinematics (`ik`).
+"""Capture sources other than BVH: Kinect and Azure Kinect joint positions (with or without a
+header, `kinect_text`), ``.trc`` and C3D marker files, Vicon ART targets (`vicon`), MediaPipe and
+BlazePose landmarks (`blazepose`), each turned into a `Motion` by one inverse kinematics (`ik`).
 
 Pipeline: `read_recording(name, content)` is how the command line, the upload and the worker read
 any recording (BVH goes to `analysis.bvh.read`); `analysis.kinematics.map_onto` then puts the

@@ -1,9 +1,12 @@
 """One entry point for every capture file: `read_recording(name, content)`.
 
 The kind is chosen by the file name's ending and checked against the content: ``.bvh``/``.bvh.gz``
-(the BVH reader), ``.csv`` (Kinect joint positions, wide or long; a long file of MediaPipe
-landmark names or numbers is read as MediaPipe), ``.json`` (Azure Kinect Body Tracking when its
-frames hold ``bodies``, else MediaPipe landmarks), ``.trc`` and ``.c3d``. Positions go through
+(the BVH reader), ``.csv`` (Kinect joint positions, wide or long, with whatever other columns a
+recorder adds, or without a header as the SDK dumps them; a long file of MediaPipe landmark names
+or numbers is read as MediaPipe), ``.txt`` (a Kinect SDK dump, or Vicon ART target text by its 119
+values a line), ``.json`` (Azure Kinect Body Tracking when its frames hold ``bodies``; BlazePose
+keyed by frame and landmark name under ``positions``; else MediaPipe landmarks), ``.trc`` and
+``.c3d``. Positions go through
 `analysis.sources.ik`; unreadable input raises `CaptureFileError` (a `BVHError`) in one sentence.
 """
 
@@ -16,22 +19,22 @@ from typing import Any
 import numpy as np
 
 from analysis.bvh.io import Motion, read
-from analysis.sources import kinect, markers, mediapipe
+from analysis.sources import blazepose, kinect, kinect_text, markers, mediapipe, vicon
 from analysis.sources.c3d import read_c3d
 from analysis.sources.errors import CaptureFileError
 from analysis.sources.ik import PLAIN, Solved, solve
-from analysis.sources.names import MEDIAPIPE
+from analysis.sources.names import KINECT_V2, MEDIAPIPE
 from analysis.sources.report import ImportedRecording, ImportReport
-from analysis.sources.tables import DEFAULT_FPS, FloatArray, csv_rows, to_metres
+from analysis.sources.tables import DEFAULT_FPS, FloatArray, csv_rows, to_metres, z_up_to_y_up
 from analysis.sources.trc import read_trc
 from analysis.sources.video import SUFFIXES as VIDEO_SUFFIXES
 from analysis.sources.video import Progress, read_video_bytes
 
 BVH_SUFFIXES = (".bvh", ".bvh.gz")
-SUFFIXES = (*BVH_SUFFIXES, ".csv", ".json", ".trc", ".c3d", *VIDEO_SUFFIXES)
+SUFFIXES = (*BVH_SUFFIXES, ".csv", ".txt", ".json", ".trc", ".c3d", *VIDEO_SUFFIXES)
 WHAT = (
-    "a .bvh, .bvh.gz, .csv (Kinect), .json (Azure Kinect or MediaPipe), .trc or .c3d file, "
-    "or a video (.mp4, .mov, .webm)"
+    "a .bvh, .bvh.gz, .csv or .txt (Kinect, Vicon), .json (Azure Kinect, BlazePose or "
+    "MediaPipe), .trc or .c3d file, or a video (.mp4, .mov, .webm)"
 )
 
 
@@ -51,7 +54,7 @@ def read_recording(
     if not content.strip():
         raise CaptureFileError("The file is empty.")
     for suffix, reader in (
-        (".csv", _csv), (".json", _json), (".trc", _trc), (".c3d", _c3d),
+        (".csv", _csv), (".txt", _text), (".json", _json), (".trc", _trc), (".c3d", _c3d),
     ):  # fmt: skip
         if lower.endswith(suffix):
             return _guarded(reader, content)
@@ -82,6 +85,7 @@ class Found:
     used: list[str]
     unused: list[str]
     notes: list[str]
+    empty: np.ndarray | None = None  # frames in which the recorder found no body at all
 
 
 def _imported(found: Found) -> ImportedRecording:
@@ -92,7 +96,7 @@ def _imported(found: Found) -> ImportedRecording:
         fps = DEFAULT_FPS
         notes.append(f"The file gives no times; {DEFAULT_FPS:g} frames per second was assumed.")
     solved = solve(points, fps)
-    notes.extend(_gap_notes(solved))
+    notes.extend(_gap_notes(solved, int(found.empty.sum()) if found.empty is not None else 0))
     report = ImportReport(kind, layout, tuple(used), tuple(unused), tuple(notes))
     return ImportedRecording(_with_warnings(solved.motion, report.warnings), report)
 
@@ -101,11 +105,14 @@ def _with_warnings(motion: Motion, warnings: tuple[str, ...]) -> Motion:
     return Motion(motion.skeleton, motion.frames, motion.frame_time, warnings)
 
 
-def _gap_notes(solved: Solved) -> list[str]:
+def _gap_notes(solved: Solved, empty: int = 0) -> list[str]:
+    """Notes on points bridged, beyond the ``empty`` frames without a body (told once)."""
+    more = " more" if empty else ""
     notes = [
-        f"The {name.replace('_', ' ')} was not seen in {n} frames; those were filled in "
-        "from the frames around them."
+        f"The {name.replace('_', ' ')} was not seen in {n - empty}{more} frames; those were "
+        "filled in from the frames around them."
         for name, n in solved.bridged.items()
+        if n > empty
     ]
     if solved.estimated:
         shown = ", ".join(PLAIN.get(e, e.replace("_", " ")) for e in solved.estimated)
@@ -116,7 +123,16 @@ def _gap_notes(solved: Solved) -> list[str]:
 
 
 def _csv(content: bytes) -> ImportedRecording:
+    head = content[:4096].decode("utf-8", "replace").splitlines()
+    if kinect_text.is_numeric_line(next((line for line in head if line.strip()), "")):
+        return _text(content)  # a dump without a header (leading empty lines: no body yet)
     rows = csv_rows(content)
+    cols = kinect_text.per_joint_columns(rows[0])
+    if cols is not None and ("state" in cols or kinect.long_columns(rows[0]) is None):
+        tracks, fps, tracking = kinect_text.read_per_joint(rows)
+        tracks = _numbered(tracks)
+        layout = "Kinect joint positions, one row per joint per frame, with the recorder's columns"
+        return _tracked(tracks, fps, tracking, layout)
     if kinect.long_columns(rows[0]) is not None:
         tracks, fps, _names, seen = kinect.read_long(rows, MEDIAPIPE)
         if set(tracks) <= set(MEDIAPIPE):
@@ -127,11 +143,66 @@ def _csv(content: bytes) -> ImportedRecording:
     return _kinect(tracks, fps, "Kinect joint positions, one row per frame")
 
 
-def _kinect(tracks: dict[str, FloatArray], fps: float | None, layout: str) -> ImportedRecording:
+def _kinect(
+    tracks: dict[str, FloatArray], fps: float | None, layout: str,
+    notes: tuple[str, ...] = (), empty: np.ndarray | None = None,
+) -> ImportedRecording:  # fmt: skip
     points, used, unused = kinect.to_canonical(tracks)
     points, unit = to_metres(points, None)
-    notes = [] if unit == "m" else [f"The positions were read as {unit}."]
-    return _imported(Found("kinect", layout, points, fps, used, unused, notes))
+    told = [*notes, *([] if unit == "m" else [f"The positions were read as {unit}."])]
+    return _imported(Found("kinect", layout, points, fps, used, unused, told, empty))
+
+
+def _numbered(tracks: dict[str, FloatArray]) -> dict[str, FloatArray]:
+    """Joint numbers (the SDK's JointType 0–24) as the SDK's joint names."""
+    if not all(name.isdigit() and int(name) < len(KINECT_V2) for name in tracks):
+        return tracks
+    return {KINECT_V2[int(name)]: track for name, track in tracks.items()}
+
+
+def _tracked(
+    tracks: dict[str, FloatArray], fps: float | None, tracking: kinect_text.Tracking, layout: str
+) -> ImportedRecording:
+    """Kinect tracks with the sensor's tracking: frames without a body told once; inferred
+    positions in short runs filled in from tracked frames, longer runs kept (and said)."""
+    if tracking.empty.all():
+        raise CaptureFileError("No body was tracked in any frame of the file.")
+    tracks, filled, kept = kinect_text.bridge_inferred(tracks, tracking)
+    notes = []
+    if tracking.empty.any():
+        notes.append(
+            f"No body was tracked in {int(tracking.empty.sum())} frames; they were filled in "
+            "from the frames around them."
+        )
+    if filled or kept:
+        notes.append(
+            f"The Kinect only inferred {filled + kept} joint positions (it did not see them): "
+            f"{filled} in short runs were filled in from the frames where it saw the joint, "
+            f"{kept} in longer runs were kept as inferred."
+        )
+    return _kinect(tracks, fps, layout, tuple(notes), tracking.empty)
+
+
+def _text(content: bytes) -> ImportedRecording:
+    """A text file of numbers without a header: Vicon ART targets or a Kinect SDK dump."""
+    rows = kinect_text.numeric_rows(content)
+    if kinect_text.frame_width(rows) == vicon.WIDTH:
+        return _vicon(rows)
+    tracks, fps, tracking, layout = kinect_text.read_dump(rows)
+    return _tracked(tracks, fps, tracking, layout)
+
+
+def _vicon(rows: list[list[float] | None]) -> ImportedRecording:
+    targets = vicon.read_targets(rows)
+    points, _unit = to_metres(vicon.joint_centres(targets), None)
+    notes = [
+        f"The file gives no times; the targets' usual {vicon.ART_FPS:g} frames per second was "
+        "assumed.",
+        "Joint centres were found as the points that move with both targets they join.",
+    ]
+    layout = "Vicon ART target text, 17 targets × position and orientation per line"
+    used = list(vicon.TARGETS)
+    return _imported(Found("vicon", layout, points, vicon.ART_FPS, used, [], notes))
 
 
 def _landmarks(world: FloatArray, fps: float | None, layout: str) -> ImportedRecording:
@@ -151,8 +222,19 @@ def _json(content: bytes) -> ImportedRecording:
     if isinstance(frames, list) and any(isinstance(f, dict) and "bodies" in f for f in frames):
         tracks, fps, _names = kinect.read_azure(data)
         return _kinect(tracks, fps, "Azure Kinect body tracking JSON")
+    if blazepose.is_keyed(data):
+        return _keyed(blazepose.read_keyed(data))
     world, fps = mediapipe.landmarks_from_json(data)
     return _landmarks(world, fps, "MediaPipe landmarks JSON")
+
+
+def _keyed(found: blazepose.KeyedLandmarks) -> ImportedRecording:
+    solved = mediapipe.motion_from_landmarks(found.world, found.fps, smoothing=1)
+    empty = int(np.sum(np.all(np.isnan(found.world), axis=(1, 2))))
+    notes = (*found.notes, *_gap_notes(solved, empty))
+    layout = "BlazePose landmarks JSON keyed by frame and landmark name"
+    report = ImportReport("mediapipe", layout, tuple(MEDIAPIPE), (), notes)
+    return ImportedRecording(_with_warnings(solved.motion, report.warnings), report)
 
 
 def _named(tracks: Mapping[str, FloatArray], unit: str | None, kind: str, layout: str,
@@ -160,7 +242,7 @@ def _named(tracks: Mapping[str, FloatArray], unit: str | None, kind: str, layout
     """Marker or keypoint tracks: Plug-in Gait markers → joint centres, else keypoint names."""
     tracks, _unit = to_metres(dict(tracks), unit)
     if markers.is_plug_in_gait(set(tracks)):
-        points = markers.joint_centres(tracks)
+        points = z_up_to_y_up(markers.joint_centres(tracks))
         note = "Joint centres were estimated from Plug-in Gait skin markers."
         layout += ", Plug-in Gait markers"
         return _imported(Found(kind, layout, points, fps, list(tracks), [], [note]))

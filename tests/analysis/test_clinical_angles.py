@@ -126,16 +126,21 @@ def test_orientation_and_positions_agree_on_ui_prmd(name):
     # as read, before the body's limits leave frames out: both computations build the same frames
     by_rotation = angle_series(motion, within_body_limits=False)
     by_position = angle_series(motion, method="positions", within_body_limits=False)
-    assert set(by_rotation) == set(ANGLE_NAMES) == set(by_position)
+    # (an ankle whose foot jumps while the person stands has no zero in either: issue 35)
+    assert set(by_rotation) == set(by_position)
+    assert set(ANGLE_NAMES) - set(by_rotation) <= {
+        "ankle_dorsiflexion_left",
+        "ankle_dorsiflexion_right",
+    }
     assert all(
-        np.isnan(by_rotation[k]).all() == np.isnan(by_position[k]).all() for k in ANGLE_NAMES
+        np.isnan(by_rotation[k]).all() == np.isnan(by_position[k]).all() for k in by_rotation
     )
     # a direction read where it is defined in one computation and not yet in the other (the
     # arm at the edge of 30° elevation, the elbow at the edge of 30°) is compared where both are
     worst = {k: float(np.nanmax(np.abs(by_rotation[k] - by_position[k]), initial=0.0))
-             for k in ANGLE_NAMES}  # fmt: skip
+             for k in by_rotation}  # fmt: skip
     assert max(worst.values()) < 3.0, worst
-    assert all(np.isfinite(by_rotation[k]).all() for k in ALWAYS_DEFINED)
+    assert all(np.isfinite(by_rotation[k]).all() for k in ALWAYS_DEFINED if k in by_rotation)
 
 
 def test_ui_prmd_ranges_are_plausible():

@@ -24,9 +24,14 @@ from analysis.pipeline import AnalysisSummary, analyse, build_model
 from tests.analysis.test_pipeline import landmarks
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
-PART = re.compile(r"\b(left|right)? ?(knee|hip|leg|ankle|arm|elbow|trunk|knees|arms|elbows)\b")
+PART = re.compile(
+    r"\b(left|right)? ?(knee|hip|leg|ankle|arm|elbow|trunk|shoulder|knees|arms|elbows)\b"
+)
+# the compensations' sentences (analysis.feedback.text.COMPENSATION_INSTRUCTIONS) too: a failed
+# repetition whose one difference is a hiked shoulder is told so (issue 34)
 DIRECTION = re.compile(
-    r"\b(Raise|Lower|Bend|Straighten|Lean|Keep your .+ still|Slow down|Speed up)\b"
+    r"\b(Raise|Lower|Bend|Straighten|Lean|Keep your .+ (still|down|facing forward|in line)|"
+    r"Slow down|Speed up)\b"
 )
 AMOUNT = re.compile(r"\d+(°| %)")
 

@@ -4,6 +4,8 @@ angular excursion against the reference's."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,7 @@ from analysis.pipeline.gestures import (
     pace_guidance,
     reach_series,
     reference_excursion,
+    usual_for_patient,
     usual_pace,
 )
 
@@ -33,14 +36,29 @@ def test_tempo_far_from_the_reference_is_named_whoever_the_patient_is():
     assert kinds(Pace(0.4, 1.0))[0] == "too fast"
     assert kinds(Pace(2.8, 1.0))[0] == "too slow"
     assert kinds(Pace(0.4, 1.0), own=Pace(0.45, 1.0))[0] == "too fast"
+    assert kinds(Pace(0.4, 1.0), own=Pace(0.45, 1.0, earlier=True))[0] == "too fast"
 
 
 def test_tempo_against_the_patients_own_pace():
     # within the reference's band, but 0.6 of the patient's usual repetition: too fast
-    assert kinds(Pace(0.84, 1.0), own=Pace(1.4, 1.0)) == ["too fast"]
+    assert kinds(Pace(0.9, 1.0), own=Pace(1.5, 1.0)) == ["too fast"]
     assert kinds(Pace(2.2, 1.0), own=Pace(1.4, 1.0)) == ["too slow"]
-    # the same repetition is this patient's usual pace: nothing to say
-    assert kinds(Pace(0.84, 1.0), own=Pace(0.84, 1.0)) == []
+    # the same repetition is this patient's usual pace and the demonstration's: nothing to say
+    assert kinds(Pace(0.9, 1.0), own=Pace(0.9, 1.0)) == []
+    # slower than usual but still quicker than the demonstration: not told to speed up
+    assert kinds(Pace(0.95, 1.0), own=Pace(0.5, 1.0)) == []
+
+
+def test_a_usual_pace_softens_the_words_but_never_hides_a_change_from_the_reference():
+    """Issue 34: tempo against the reference's repetition time in a first session and after
+    one alike; an earlier session's usual pace only says it is usual for this patient."""
+    first, usual = None, Pace(1.6, 1.0, earlier=True)
+    assert kinds(Pace(1.6, 1.0), first) == ["too slow"]
+    assert kinds(Pace(0.6, 1.0), first) == ["too fast"]
+    assert kinds(Pace(1.6, 1.0), usual) == ["too slow"]
+    assert usual_for_patient("too slow", usual, RULES)
+    assert not usual_for_patient("too slow", Pace(1.0, 1.0, earlier=True), RULES)
+    assert not usual_for_patient("too slow", replace(usual, earlier=False), RULES)
 
 
 def test_reach_against_the_reference_and_the_patients_own():

@@ -1,4 +1,5 @@
-"""The analysis pipeline end to end: CONTRACTS.md fields on every UI-PRMD session, typed errors
+"""The analysis pipeline end to end: the interface contract's fields on every UI-PRMD session,
+typed errors
 for bad input, and sensible results on synthetic performances with known truth."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Repetitions from a cleaned landmark sequence (analysis/repetitions.py)."""
+"""Repetitions from a cleaned landmark sequence (analysis/landmarks/repetitions.py)."""
 
 from __future__ import annotations
 

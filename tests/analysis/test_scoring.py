@@ -1,5 +1,5 @@
 """Repetition scores: features against the tutor, trained scorer, and a patient who uses the
-other side (analysis/scoring.py, with the pipeline's scoring stage)."""
+other side (analysis/assessment/scoring.py, with the pipeline's scoring stage)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Repetition boundaries on the progress signal (analysis/segmentation.py)."""
+"""Repetition boundaries on the progress signal (analysis/landmarks/segmentation.py)."""
 
 from __future__ import annotations
 

@@ -107,8 +107,9 @@ def test_2_recording_and_progress_pages_speak_plain_words(page, live_server, dem
     axes = page.locator("#chart-angles .g-xtitle, #chart-angles .g-ytitle").all_text_contents()
     assert axes == ["time (s)", "angle (°)"]
     legend = page.text_content("#chart-angles .legend")
-    assert "the reference adjusted to your level" in legend
-    assert re.search(r"(left|right) (thigh|upper arm|lower leg|foot|collarbone)", legend)
+    # the clinical angles of the table, each with its normal range; never body segments
+    assert re.search(r"(Left|Right) [a-z ]+ \(normal -?\d+° to \d+°\)", legend), legend
+    assert not re.search(r"(left|right) (thigh|upper arm|lower leg|foot|collarbone)", legend)
     text = page.inner_text("body") + legend
     assert not RIG_NAME.search(text) and "γ" not in text and "tutor_adjusted" not in text
 

@@ -365,8 +365,10 @@ def test_failed_repetitions_hear_why_and_no_praise(world, exercise_with_model, s
     failed = [r for r in reps if not r["passed"]]
     assert len(failed) >= 3
     assert all("well done" not in r["words"].lower() for r in failed)
-    assert all("score" in r["words"] or r["guidance"] for r in failed)
+    # issue 34: a reason the patient can act on (its judgement's first), never a score
+    assert all(r["reasons"] and r["words"].endswith(r["reasons"][0]) for r in failed)
+    assert all("score" not in r["words"] and "tutor" not in r["words"] for r in reps)
     passed = [r for r in reps if r["passed"]]
     assert passed and all(
-        r["words"].endswith("well done.") or r["guidance"][0]["text"] in r["words"] for r in passed
+        r["words"].endswith("well done.") or r["reasons"][0] in r["words"] for r in passed
     )

@@ -1,4 +1,4 @@
-"""The REST API as CONTRACTS.md lists it: token auth, patients, exercises, uploads."""
+"""The REST API as the interface contract lists it: token auth, patients, exercises, uploads."""
 
 from __future__ import annotations
 
@@ -230,3 +230,13 @@ def test_schema_types_every_response_object(api):
             for code, answer in operation.get("responses", {}).items():
                 bare += untyped_objects(answer, f"{method.upper()} {path} {code}")
     assert bare == [], "\n".join(bare)
+
+
+def test_docs_page_asks_for_the_sign_in_its_schema_needs(client, world):
+    """An anonymous visitor is never shown a docs page whose schema request then fails."""
+    docs = client.get("/api/docs/")
+    assert docs.status_code == 302 and "/accounts/login/" in docs["Location"]
+    assert client.get("/api/schema/").status_code == 401
+    client.force_login(world.therapist)
+    assert client.get("/api/docs/").status_code == 200
+    assert client.get("/api/schema/").status_code == 200

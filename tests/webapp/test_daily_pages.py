@@ -75,18 +75,21 @@ def test_pain_of_six_or_more_reaches_the_attention_list(client, world):
 
 
 def test_progress_pdf_range_of_motion_lines_never_join_two_exercises():
+    """Clinical angles' ranges (as in the recording's table), named with their normal range."""
+    knee = "knee_flexion_left"
     points = [
-        {"exercise_name": "Deep squat", "range_of_motion": {"LeftLowerLeg": 90.0}},
-        {"exercise_name": "Shoulder abduction", "range_of_motion": {"LeftLowerLeg": 5.0}},
-        {"exercise_name": "Deep squat", "range_of_motion": {"LeftLowerLeg": 95.0}},
+        {"exercise_name": "Deep squat", "clinical_angles": {knee: {"range": 90.0}}},
+        {"exercise_name": "Shoulder abduction", "clinical_angles": {knee: {"range": 5.0}}},
+        {"exercise_name": "Deep squat", "clinical_angles": {knee: {"range": 95.0}}},
     ]
     days = ("2026-11-02T09:00", "2026-11-02T15:00", "2026-11-04T10:00")
     for point, when in zip(points, days, strict=True):
         point["date"] = when  # x: days since the report's first day, same-day sessions spread
     charts = rom_series(points)
+    label = "Left knee flexion"
     assert charts == {
-        "Deep squat": {"left lower leg": [(round(1 / 3, 4), 90.0), (2.5, 95.0)]},
-        "Shoulder abduction": {"left lower leg": [(round(2 / 3, 4), 5.0)]},
+        "Deep squat": {label: [(round(1 / 3, 4), 90.0), (2.5, 95.0)]},
+        "Shoulder abduction": {label: [(round(2 / 3, 4), 5.0)]},
     }
 
 

@@ -14,6 +14,7 @@ from webapp.dashboard.precompute import refresh_all
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient, Prescription
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
+from webapp.recordings.reading import build, store_missing
 
 HOME = "dashboard:home"
 
@@ -34,7 +35,8 @@ def recording(patient, exercise, days_ago: float, status=RunStatus.SUCCEEDED, sc
     uploaded = timezone.now() - datetime.timedelta(days=days_ago)
     Recording.objects.filter(pk=made.pk).update(uploaded_at=uploaded)
     summary = {"score": score} if score is not None else {}
-    AnalysisRun.objects.create(recording=made, status=status, summary=summary, **run)
+    created = AnalysisRun.objects.create(recording=made, status=status, summary=summary, **run)
+    build(created)  # its reading, as a run that ends has one
     made.uploaded_at = uploaded
     return made
 
@@ -222,6 +224,7 @@ def fill_clinic(world, patients: int, recordings_each: int) -> None:
     Prescription.objects.bulk_create(prescriptions)
     Recording.objects.bulk_create(recs)
     AnalysisRun.objects.bulk_create(runs)
+    store_missing(AnalysisRun.objects.all())  # a bulk load stores its runs' readings too
     for j in range(recordings_each):
         Recording.objects.filter(pk__in=[r.pk for r in recs[j::recordings_each]]).update(
             uploaded_at=now - datetime.timedelta(days=3 * (recordings_each - j))

@@ -3,6 +3,7 @@ from django.core.management import call_command
 from django.core.management.base import CommandError
 
 from webapp.accounts.models import Clinic, User
+from webapp.exercises.body_parts import ticked
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 
@@ -22,6 +23,7 @@ def test_demo_clinic_loads_once(client, settings):
         assert exercise.tutor_landmark_types[0] == 1
         assert len(exercise.tutor_landmark_frames) == len(exercise.tutor_landmark_types)
     assert_analysed_recordings_and_models()
+    assert_body_parts_ticked_and_described(client)
     # The published demo passwords work (one load is slow enough: the same test checks them).
     assert client.login(username="demo-therapist", password="demo-therapist-pw")
     assert client.login(username="demo-patient", password="demo-patient-pw")
@@ -70,3 +72,18 @@ def assert_analysed_recordings_and_models():
     for patient in Patient.objects.all():
         assert patient.recordings.count() >= 2 and patient.last_activity_at is not None
         assert patient.prescriptions.exists() and patient.levels.exists()
+
+
+def assert_body_parts_ticked_and_described(client):
+    """Each demo exercise's page ticks the body parts its model trains; the shoulder abduction
+    says to go above shoulder height, as its reference (about 140°) does."""
+    assert client.login(username="demo-therapist", password="demo-therapist-pw")
+    for exercise in Exercise.objects.all():
+        shown = client.get(f"/exercises/{exercise.pk}/tutor.json").json()["involved_joints"]
+        trained = set(exercise.active_model.training_report.get("involved_joints") or [])
+        assert len(shown) >= 3, exercise.name
+        assert shown == ticked(exercise.tutor_motion().skeleton, trained), exercise.name
+    abduction = Exercise.objects.get(name="Shoulder abduction")
+    page = client.get(f"/exercises/{abduction.pk}/").content.decode()
+    assert "past shoulder height" in page and "to shoulder height and" not in page
+    client.logout()

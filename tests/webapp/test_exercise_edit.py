@@ -9,6 +9,7 @@ from django.core.files.uploadedfile import SimpleUploadedFile
 from django.urls import reverse
 
 from tests.personas import fixture_bytes, make_exercise, make_recording
+from tests.webapp.test_replace_reference import confirm_key_poses
 from webapp.audit.models import AuditEvent
 from webapp.exercises.models import Exercise, ModelStatus
 from webapp.recordings.forms import UploadForm, upload_choices
@@ -89,7 +90,7 @@ def test_archive_asks_first_then_hides_and_unarchive_brings_back(client, world, 
     assert client.post(url("archive", exercise)).status_code == 302
     exercise.refresh_from_db()
     assert exercise.archived_at is None and "Deep squat" in offered_for_upload(world)
-    assert audit_rows(exercise) == ["update", "update"]
+    assert audit_rows(exercise) == ["archive", "restore"]  # the audit log tells them apart
 
 
 def test_archived_exercise_keeps_its_recordings_and_results(client, world, exercise):
@@ -123,6 +124,9 @@ def test_replacing_the_reference_builds_a_new_version_and_earlier_results_keep_t
     with django_capture_on_commit_callbacks(execute=True):
         answer = client.post(url("reference", exercise), {"tutor": new_reference()})
     assert answer.status_code == 302, answer.content
+    # the version in use stays until the new reference's key poses are saved (issue 38)
+    assert exercise.models.count() == 1
+    confirm_key_poses(client, exercise, django_capture_on_commit_callbacks)
     exercise.refresh_from_db()
     assert exercise.tutor_file.name != old_file and exercise.tutor_checksum != old_checksum
     latest = exercise.models.order_by("-version").first()

@@ -16,6 +16,7 @@ from django.urls import reverse
 from analysis.bvh import read
 from tests.capture_samples import canonical_points, kinect_wide_csv, trc
 from tests.personas import fixture_bytes, fixture_landmarks, make_exercise, make_recording
+from tests.webapp.test_replace_reference import confirm_key_poses
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from webapp.recordings import similar
 from workers.analysis_task import analyse_run
@@ -111,6 +112,7 @@ def test_a_kinect_reference_builds_a_model_that_analyses_a_bvh_recording(
             {"tutor": SimpleUploadedFile("kinect.csv", tutor_as(kinect_wide_csv))},
         )
     assert response.status_code == 302, response.content.decode()[:3000]
+    confirm_key_poses(client, exercise, django_capture_on_commit_callbacks)  # builds the model
     exercise.refresh_from_db()
     assert exercise.tutor_file.name.endswith(".csv")
     built = exercise.models.get()

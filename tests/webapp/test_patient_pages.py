@@ -35,7 +35,10 @@ def squat(world):
 
 
 def summary(scores: list[float], went_well: tuple[str, ...] = ()) -> AnalysisSummary:
-    reps = tuple(RepetitionResult(10 * i, 10 * i + 9, 10 * i + 5, s) for i, s in enumerate(scores))
+    reps = tuple(
+        RepetitionResult(10 * i, 10 * i + 9, 10 * i + 5, s, passed=s >= 70)  # as the analysis
+        for i, s in enumerate(scores)
+    )
     corrections = tuple(Correction(text, "left arm", "raise", 15.0, "°", (1,), 0) for text in TIPS)
     return AnalysisSummary(
         frames=100, fps=30.0, landmarks=(), repetitions=reps, score=60.0,

@@ -8,6 +8,7 @@ get 401 (API). The routes come from the URL resolver: a route without a row here
 
 from __future__ import annotations
 
+import datetime
 import re
 from dataclasses import dataclass
 
@@ -18,6 +19,7 @@ from django.urls import URLPattern, URLResolver, get_resolver, reverse
 from tests.personas import make_exercise, make_recording
 from webapp.accounts.tokens import issue_token
 from webapp.live.models import LiveSession
+from webapp.patients.models import Prescription
 
 PERSONAS = (
     "therapist",
@@ -88,6 +90,10 @@ CASES = [
     Case("accounts:invitation", "invitation-link", "get", EVERYONE_200),
     Case("accounts:new-password", "password-link", "get", EVERYONE_200),
     Case("dashboard:home", None, "get", SIGNED_IN_PAGE),
+    # The camera page: the patient's own prescription, or one of the clinic's for the staff; the
+    # exercise here has no model yet, so starting a session answers 409 to those who may.
+    Case("camera:page", "prescription", "get", OWN_OBJECT),
+    Case("camera:start", "prescription", "post", (409, 409, 409, 404, 409, 404, 302)),
     # The patient's own pages: staff have their own; an exercise not prescribed to them is 404.
     Case("dashboard:my-progress", None, "get", (403, 403, 403, 403, 200, 200, 302)),
     Case("dashboard:my-reference", "exercise", "get", (403, 403, 403, 403, 404, 404, 302)),
@@ -120,6 +126,7 @@ CASES = [
     Case("recordings:detail", "recording", "get", OWN_OBJECT),
     Case("recordings:status", "recording", "get", OWN_OBJECT),
     Case("recordings:rerun", "recording", "post", (302, 302, 302, 404, 403, 403, 302)),
+    Case("recordings:label", "recording", "post", (302, 302, 302, 404, 403, 403, 302)),
     Case("recordings:result", "recording", "get", OWN_OBJECT),
     # a phone video's frames: the world's recording is a BVH file, so there is none to see
     Case("recordings:video", "recording", "get", (404, 404, 404, 404, 404, 404, 302)),
@@ -149,8 +156,8 @@ CASES = [
     Case("api-recording-corrections", "recording", "get", (200, 200, 200, 404, 403, 404, 401)),
     Case("api-recording-confirm", "recording", "post", (400, 400, 400, 404, 400, 404, 401)),
     Case("api-schema", None, "get", (200, 200, 200, 200, 200, 200, 401)),
-    # The Swagger page is static; the schema it loads (api-schema) needs a sign-in or a token.
-    Case("api-docs", None, "get", EVERYONE_200),
+    # The Swagger page asks for the sign-in its schema request (api-schema) needs.
+    Case("api-docs", None, "get", SIGNED_IN_PAGE),
     Case("reports:playback", "recording", "get", OWN_OBJECT),
     Case("reports:playback-bin", "recording", "get", (409, 409, 409, 404, 409, 404, 302)),
     Case("reports:recording-pdf", "recording", "get", OWN_REPORT_PDF),
@@ -193,8 +200,11 @@ def objects(world):
     live = LiveSession.objects.create(
         clinic=world.clinic, patient=world.patient, exercise=exercise, created_by=world.therapist
     )
+    prescription = Prescription.objects.create(
+        patient=world.patient, exercise=exercise, start_date=datetime.date(2026, 11, 2)
+    )
     return {"patient": world.patient, "exercise": exercise, "recording": recording, "token": token,
-            "live": live, **account_objects(world)}  # fmt: skip
+            "live": live, "prescription": prescription, **account_objects(world)}  # fmt: skip
 
 
 def account_objects(world) -> dict:

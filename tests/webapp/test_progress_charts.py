@@ -69,12 +69,20 @@ def history(world):
 
 
 def test_thirteen_body_parts_give_four_lines_the_ones_moved_most(history):
+    """Range of motion: the clinical angles the exercise moves most (a squat: knees and hips,
+    never feet), their ranges those of the recording's table; levels: the body parts."""
     (chart,) = progress_charts(history.patient)
     assert len(chart["rom"]) == MAX_LINES and len(chart["gamma"]) == MAX_LINES
-    peaks = [max(line["y"]) for line in chart["rom"]]
-    assert peaks == [120.0, 110.0, 100.0, 90.0]  # Joint12..Joint9, largest first
+    assert [line["label"] for line in chart["rom"]] == [
+        "Left knee flexion (normal 0° to 135°)",
+        "Right knee flexion (normal 0° to 135°)",
+        "Left hip flexion (normal -30° to 120°)",
+        "Right hip flexion (normal -30° to 120°)",
+    ]
+    assert [max(line["y"]) for line in chart["rom"]] == [90.0, 85.0, 60.0, 55.0]
     assert all(len(line["y"]) == 5 for line in chart["rom"])
-    assert not any("Joint" in line["label"] and "_" in line["label"] for line in chart["rom"])
+    assert not any("foot" in line["label"].lower() for line in chart["rom"])
+    assert not any("Joint" in line["label"] and "_" in line["label"] for line in chart["gamma"])
 
 
 def test_one_point_per_session_and_same_day_sessions_side_by_side(history):

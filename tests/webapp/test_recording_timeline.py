@@ -47,7 +47,7 @@ def test_page_draws_layers_guidance_and_verdicts_in_seconds(client, world, recor
     for layer in ("identified", "refined", "periodic"):
         assert f'<input type="checkbox" data-layer="{layer}" checked>' in html
         assert f'class="tl-row layer" data-layer="{layer}"' in html
-    assert "key poses the analysis found: 1 (out of 7 moments that looked like one)" in html
+    assert "key poses recognised directly: 1" in html
     assert "key poses adjusted to the nearest clear position: 1" in html
     assert "key poses removed (1) or added (1) so they come in the exercise's order" in html
     assert '<span style="left:51.282%">1</span>' in html and "time (s)" in html

@@ -72,9 +72,11 @@ def test_playback_description_lists_present_skeletons_only(client, world, record
     assert [m["frame"] for m in data["landmarks"]] == [3, 20, 35]
     assert data["landmarks"][1]["name"] == "end of range"
     assert data["feedback"][0]["frame"] == 20
-    spine = [s for s in data["angles"]["series"] if s["joint"] == "Spine"]
+    # body segments' angles under their own name; no clinical curve kept in these arrays
+    spine = [s for s in data["segments"]["series"] if s["joint"] == "Spine"]
     assert {s["skeleton"] for s in spine} == {"patient", "tutor_adjusted"}
-    assert len(spine[0]["values"]) == len(data["angles"]["frames"]) == F
+    assert len(spine[0]["values"]) == len(data["segments"]["frames"]) == F
+    assert data["angles"]["series"] == []
 
 
 def test_playback_binary_is_float32_skeleton_frame_joint_xyz(client, world, recording):

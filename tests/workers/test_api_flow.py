@@ -1,5 +1,5 @@
 """The done-when flow: upload through the API, a real worker process analyses it on Redis and
-PostgreSQL, the API answers `succeeded` with the result fields of CONTRACTS.md."""
+PostgreSQL, the API answers `succeeded` with the result fields of the interface contract."""
 
 from __future__ import annotations
 

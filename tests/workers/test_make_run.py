@@ -28,6 +28,7 @@ import requests
 
 from tests.local_server import LocalServer
 from tests.personas import FIXTURES, PASSWORD
+from tests.workers.test_quiet_log import check_quiet_log
 from workers.limits import MEMORY_MESSAGE, died_too_often_message, time_limit_message
 
 pytestmark = pytest.mark.slow
@@ -297,6 +298,10 @@ def test_an_analysis_past_the_hard_time_limit_fails_with_the_plain_reason(site, 
         assert "Hard time limit (4" in server.log_tail(400) and server.running()
     finally:
         server.stop()
+
+
+def test_a_refusal_is_one_line_and_a_successful_poll_none(site):
+    check_quiet_log(site, "limits", Api(site).exercise)  # tests/workers/test_quiet_log.py
 
 
 def test_sigterm_to_the_launcher_leaves_none_of_its_processes_after_10_s(site):

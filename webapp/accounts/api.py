@@ -1,4 +1,4 @@
-"""Accounts through the API (CONTRACTS.md "Invitations" and "Users").
+"""Accounts through the API (the interface contract's "Invitations" and "Users").
 
 `POST /api/v1/invitations/` (a clinic admin; a therapist for their own patients) answers 201
 `{"id", "url", "expires_at"}`, `url` being the one-time link's path on this site.

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from django import forms
 from django.contrib.auth import password_validation
-from django.contrib.auth.forms import UsernameField
+from django.contrib.auth.forms import AuthenticationForm, UsernameField
+from django.core.exceptions import ValidationError
 
 from webapp.accounts.models import Role, User
 from webapp.patients.models import Patient
@@ -96,3 +97,30 @@ class AcceptInvitationForm(NewPasswordForm):
 
     def user_for_checks(self) -> User:
         return User(username=self.cleaned_data.get("username", ""))
+
+
+class LoginForm(AuthenticationForm):
+    """The login form; a deactivated account with its right password is told it is
+    deactivated, not that the username and password didn't match (which sends people to
+    retype a password that is right)."""
+
+    DEACTIVATED = (
+        "This account has been deactivated. Ask your clinic to reactivate it if you still need it."
+    )
+
+    deactivated = False
+
+    def clean(self):
+        try:
+            return super().clean()
+        except ValidationError as error:
+            if getattr(error, "code", None) == "invalid_login" and self._deactivated():
+                self.deactivated = True  # the page says so instead of "didn't match"
+                raise ValidationError(self.DEACTIVATED, code="inactive") from error
+            raise
+
+    def _deactivated(self) -> bool:
+        username = self.cleaned_data.get("username") or ""
+        password = self.cleaned_data.get("password") or ""
+        user = User.objects.filter(username=username, is_active=False).first()
+        return user is not None and user.check_password(password)

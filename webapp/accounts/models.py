@@ -82,7 +82,7 @@ class ApiToken(models.Model):
         return self.expires_at is None or self.expires_at > timezone.now()
 
 
-# The roles' names in the API (CONTRACTS.md: "therapist" | "admin" | "patient").
+# The roles' names in the API (the interface contract: "therapist" | "admin" | "patient").
 API_ROLES = {"therapist": Role.THERAPIST, "admin": Role.CLINIC_ADMIN, "patient": Role.PATIENT}
 ROLE_NAMES = {role: name for name, role in API_ROLES.items()}
 

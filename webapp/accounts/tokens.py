@@ -1,6 +1,7 @@
 """Clinic-scoped, revocable API tokens: issuing, checking and the password-for-token endpoint.
 
-`POST /api/v1/auth/token/` (username, password) answers `{"token": "..."}` as CONTRACTS.md says;
+`POST /api/v1/auth/token/` (username, password) answers `{"token": "..."}` as the interface
+contract says;
 each call issues a new token that expires after `settings.API_TOKEN_DAYS`. Staff with two-factor
 authentication must also send `otp` (the 6-digit code), so the API is no way around the second
 factor. Failed passwords count towards the django-axes lockout exactly like the login page.

@@ -1,15 +1,16 @@
 """A patient's history for other systems: CSV (one row per recording) and a FHIR R4 Bundle.
 
-Both read each recording's newest succeeded run through `AnalysisRun.result` (the typed
-`AnalysisSummary`); recordings without one are left out, runs without clinical angles (older
-runs) have empty cells / no angle Observations. Access as every API view: another clinic's
+Both read each recording's newest succeeded run: its figures (score, repetitions and those passed)
+from the run's reading (`webapp.recordings.reading`), its angles from `AnalysisRun.result`;
+recordings without one are left out, runs without clinical angles (older runs) have empty
+cells / no angle Observations. Access as every API view: another clinic's
 patient, or another patient's record, answers 404; each export is written to the audit log.
 
 FHIR: a ``collection`` Bundle with the Patient and, per recording, one Observation for the
 session score (with its repetitions as components) and one per measured angle range
 (``valueRange`` in degrees, UCUM ``deg``). No LOINC code for these measures was confirmed, so
 they use the local code system `LOCAL_SYSTEM` (codes: ``session-score``, ``repetitions``,
-``repetitions-passed``, ``span`` and the angle names of CONTRACTS.md, e.g.
+``repetitions-passed``, ``span`` and the angle names of the interface contract, e.g.
 ``knee_flexion_left``), documented in docs/sections/clinical.md.
 """
 
@@ -31,15 +32,15 @@ from rest_framework.views import APIView
 from analysis.clinical import ANGLE_NAMES
 from analysis.pipeline.results import AnalysisSummary
 from webapp.accounts.permissions import get_patient_for_user
+from webapp.api.fhir_schema import FhirBundleSerializer
 from webapp.audit import log
 from webapp.patients.history_export import (
     analysed_recordings,
     exercise_name,
     history_csv_response,
-    passed_count,
 )
 from webapp.patients.models import Patient
-from webapp.recordings.models import Recording
+from webapp.recordings.models import Recording, RunReading
 
 LOCAL_SYSTEM = getattr(settings, "FHIR_LOCAL_CODE_SYSTEM", "urn:physio-dashboard:measure")
 UCUM = "http://unitsofmeasure.org"
@@ -123,26 +124,24 @@ def observation(patient: Patient, recording: Recording, key: str, **fields) -> d
     }
 
 
-def score_observation(patient: Patient, recording: Recording, result: AnalysisSummary):
+def score_observation(patient: Patient, recording: Recording, reading: RunReading):
+    """The session score with its repetitions and those passed as components: the run's reading
+    (the therapist's verdicts first), the figures of every page and of the history CSV."""
     components = [
         {
             "code": local_code("repetitions", "Repetitions"),
-            "valueQuantity": quantity(result.repetition_count, "repetitions", "1"),
-        }
+            "valueQuantity": quantity(reading.repetition_count, "repetitions", "1"),
+        },
+        {
+            "code": local_code("repetitions-passed", "Repetitions passed"),
+            "valueQuantity": quantity(reading.passed_count, "repetitions", "1"),
+        },
     ]
-    passed = passed_count(result)
-    if passed != "":
-        components.append(
-            {
-                "code": local_code("repetitions-passed", "Repetitions passed"),
-                "valueQuantity": quantity(float(passed), "repetitions", "1"),
-            }
-        )
     name = exercise_name(recording) or "exercise"
-    if result.score is None:  # the recording does not show the exercise: no score, and why
-        value: dict[str, Any] = {"dataAbsentReason": {"text": result.match.message}}
+    if not reading.fits or reading.score is None:  # not the exercise: no score, and why
+        value: dict[str, Any] = {"dataAbsentReason": {"text": reading.statements["message"]}}
     else:
-        value = {"valueQuantity": quantity(round(result.score, 2), "score", "{score}")}
+        value = {"valueQuantity": quantity(round(reading.score, 2), "score", "{score}")}
     return observation(
         patient,
         recording,
@@ -179,8 +178,8 @@ def angle_observations(patient: Patient, recording: Recording, result: AnalysisS
 def patient_bundle(patient: Patient) -> dict[str, Any]:
     """The FHIR R4 Bundle (type collection) of one patient's analysed history."""
     entries = [entry(patient_resource(patient))]
-    for recording, result in analysed_recordings(patient):
-        entries.append(entry(score_observation(patient, recording, result)))
+    for recording, result, reading in analysed_recordings(patient):
+        entries.append(entry(score_observation(patient, recording, reading)))
         entries.extend(entry(o) for o in angle_observations(patient, recording, result))
     return {
         "resourceType": "Bundle",
@@ -194,7 +193,7 @@ def patient_bundle(patient: Patient) -> dict[str, Any]:
 class PatientFHIR(APIView):
     """The patient and their session scores and angle ranges as a FHIR R4 Bundle (JSON)."""
 
-    @extend_schema(responses={(200, "application/fhir+json"): OpenApiResponse(OpenApiTypes.OBJECT)})
+    @extend_schema(responses={(200, "application/fhir+json"): FhirBundleSerializer})
     def get(self, request: Request, pk) -> Response:
         patient = audited_patient(request, pk)
         return Response(patient_bundle(patient), content_type="application/fhir+json")

@@ -13,11 +13,11 @@ from rest_framework import serializers
 from rest_framework.request import Request
 from rest_framework.response import Response
 
+from analysis.pipeline.results import ExerciseMatch, RepetitionResult
 from webapp.api.numbers import rounded, utc_iso
 from webapp.api.serializers import (
     AngleRangeSerializer,
     AssessmentSerializer,
-    GuidanceSerializer,
     LandmarkSerializer,
     UTCDateTimeField,
 )
@@ -54,13 +54,20 @@ def progress_response(request: Request, patient_id: Any, points_json: str) -> Ht
 
 
 class ResultRepetitionSerializer(serializers.Serializer):
-    start = serializers.IntegerField()
-    end = serializers.IntegerField()
-    score = serializers.FloatField()
-    passed = serializers.BooleanField(allow_null=True, help_text="by the exercise's threshold")
-    guidance = GuidanceSerializer(many=True, required=False)
-    alignment_tau = serializers.FloatField(required=False, allow_null=True)
-    similarity = serializers.FloatField(required=False, allow_null=True)
+    """A repetition as the result holds it (its keys generated from `RepetitionResult`) with the
+    run's reading beside: the verdict (the therapist's label first), by whom, in words, why."""
+
+    class Meta:
+        result_class = RepetitionResult
+
+    passed = serializers.BooleanField(
+        help_text="the verdict: the therapist's label when they gave one, else the analysis'"
+    )
+    verdict_by = serializers.ChoiceField(choices=["therapist", "analysis"])
+    verdict = serializers.CharField(help_text="the verdict in words, with the score it compares")
+    reasons = serializers.ListField(
+        child=serializers.CharField(), help_text="why, in words; never empty when not passed"
+    )
 
 
 class NamedAssessmentSerializer(AssessmentSerializer):
@@ -73,14 +80,22 @@ class CommentSerializer(serializers.Serializer):
     tip = serializers.CharField(required=False)
 
 
+class MatchSerializer(serializers.Serializer):
+    """Whether the recording shows the exercise (keys generated from `ExerciseMatch`)."""
+
+    class Meta:
+        result_class = ExerciseMatch
+
+
 class MetricsSerializer(serializers.Serializer):
-    score = serializers.FloatField()
+    score = serializers.FloatField(allow_null=True, help_text="null when it does not fit")
     repetition_count = serializers.IntegerField()
     tempo = serializers.FloatField(allow_null=True)
     range_of_motion = serializers.DictField(child=serializers.FloatField())
     frames = serializers.IntegerField()
     fps = serializers.FloatField()
     mirrored = serializers.BooleanField()
+    match = MatchSerializer()
 
 
 class SimilarRecordingSerializer(serializers.Serializer):
@@ -89,6 +104,22 @@ class SimilarRecordingSerializer(serializers.Serializer):
     patient_name = serializers.CharField()
     uploaded_at = UTCDateTimeField()
     distance = serializers.FloatField()
+
+
+class ReadingSerializer(serializers.Serializer):
+    """The run's one reading (`webapp.recordings.reading`): what every page and export says."""
+
+    fits = serializers.BooleanField(help_text="False: the recording does not show the exercise")
+    score = serializers.FloatField(allow_null=True, help_text="0–100; null when it does not fit")
+    repetition_count = serializers.IntegerField()
+    passed_count = serializers.IntegerField(help_text="repetitions whose verdict is passed")
+    labelled_count = serializers.IntegerField(help_text="verdicts given by a therapist")
+    message = serializers.CharField(allow_blank=True, help_text="why it does not fit, or empty")
+    to_correct = serializers.ListField(child=serializers.CharField())
+    went_well = serializers.ListField(child=serializers.CharField())
+    therapist = serializers.ListField(
+        child=serializers.CharField(), help_text="the therapist's corrections, in words"
+    )
 
 
 class ResultDataSerializer(serializers.Serializer):
@@ -103,6 +134,7 @@ class ResultDataSerializer(serializers.Serializer):
     model_version = serializers.IntegerField(required=False, allow_null=True)
     code_version = serializers.CharField(required=False)
     repetitions = ResultRepetitionSerializer(many=True, required=False)
+    reading = ReadingSerializer(required=False, allow_null=True)
     pass_threshold = serializers.FloatField(required=False, allow_null=True)
     landmarks = LandmarkSerializer(many=True, required=False)
     assessment = NamedAssessmentSerializer(many=True, required=False)
@@ -138,6 +170,14 @@ class VerdictSerializer(serializers.Serializer):
 class CorrectionsSerializer(serializers.Serializer):
     run = serializers.UUIDField(allow_null=True)
     landmarks = LandmarkFixSerializer(required=False, allow_null=True)
+    levels = LevelFixSerializer(many=True, required=False)
+    repetitions = VerdictSerializer(many=True, required=False)
+
+
+class CorrectionsInputSerializer(serializers.Serializer):
+    """What a therapist sends: any of the three (`webapp.recordings.corrections`)."""
+
+    landmarks = LandmarkFixSerializer(required=False)
     levels = LevelFixSerializer(many=True, required=False)
     repetitions = VerdictSerializer(many=True, required=False)
 

@@ -31,6 +31,23 @@ SCALARS: dict[Any, Schema] = {
 }
 
 
+# OpenAPI 3.0.3: `nullable` only widens a `type` beside it, so {"allOf": [{"$ref": X}],
+# "nullable": true} (drf-spectacular's way) still refuses null, X's type being object. A value
+# that may be null is written {"anyOf": [{"$ref": X}, Null]} instead (`nullable_ref`), Null
+# allowing null only (its `type` is there for `nullable` to widen; no string is in its enum).
+NULL_NAME = "Null"
+NULL_COMPONENT: Schema = {
+    "type": "string",
+    "description": "No value: JSON null.",
+    "nullable": True,
+    "enum": [None],
+}
+
+
+def nullable_ref(ref: Schema) -> Schema:
+    return {"anyOf": [ref, {"$ref": REF_PREFIX + NULL_NAME}]}
+
+
 def component_name(cls: type) -> str:
     """AnalysisSummary is the result itself; the others are named under it (no clash with the
     API's own serializers, such as its `Guidance` or `AngleRange`)."""
@@ -39,9 +56,16 @@ def component_name(cls: type) -> str:
 
 def result_components() -> dict[str, Schema]:
     """Every component of the result, by name; the root is `ROOT_NAME`."""
-    components: dict[str, Schema] = {}
+    components: dict[str, Schema] = {NULL_NAME: dict(NULL_COMPONENT)}
     _add_class(AnalysisSummary, components)
     return components
+
+
+def class_component(cls: type) -> Schema:
+    """The generated component of one result dataclass (the components it refers to are among
+    `result_components`, which the schema always holds)."""
+    components: dict[str, Schema] = {}
+    return components[_add_class(cls, components)]
 
 
 def _add_class(cls: type, components: dict[str, Schema]) -> str:
@@ -57,6 +81,8 @@ def _add_class(cls: type, components: dict[str, Schema]) -> str:
     written.update(shape.written_as)
     written.update(shape.added)
     properties = {key: _schema_of(hint, components) for key, hint in written.items()}
+    if "score" in properties:  # the interface contract: `score` is nullable wherever carried
+        properties["score"] = {**properties["score"], "nullable": True}
     components[name] = {
         "type": "object",
         "description": _first_line(cls.__doc__),
@@ -75,13 +101,7 @@ def _schema_of(hint: Any, components: dict[str, Schema]) -> Schema:
     """The OpenAPI 3.0 schema of one type hint."""
     origin, args = typing.get_origin(hint), typing.get_args(hint)
     if origin in (typing.Union, types.UnionType):
-        present = [a for a in args if a is not type(None)]
-        if len(present) != 1:
-            raise TypeError(f"only `X | None` unions are described: {hint}")
-        inner = _schema_of(present[0], components)
-        if "$ref" in inner:  # OpenAPI 3.0 ignores keys beside a $ref
-            inner = {"allOf": [inner]}
-        return {**inner, "nullable": True} if len(present) < len(args) else inner
+        return _optional_schema(hint, components)
     if hint in SCALARS:
         return dict(SCALARS[hint])
     if dataclasses.is_dataclass(hint) and isinstance(hint, type):
@@ -98,6 +118,17 @@ def _schema_of(hint: Any, components: dict[str, Schema]) -> Schema:
     raise TypeError(f"no JSON schema for {hint!r}")
 
 
+def _optional_schema(hint: Any, components: dict[str, Schema]) -> Schema:
+    """`X | None`: X's schema, null allowed."""
+    present = [a for a in typing.get_args(hint) if a is not type(None)]
+    if len(present) != 1:
+        raise TypeError(f"only `X | None` unions are described: {hint}")
+    inner = _schema_of(present[0], components)
+    if "$ref" in inner:  # OpenAPI 3.0: `nullable` widens only a `type` beside it
+        return nullable_ref(inner)
+    return {**inner, "nullable": True}
+
+
 def _tuple_schema(args: tuple[Any, ...], components: dict[str, Schema]) -> Schema:
     if len(args) == 2 and args[1] is Ellipsis:
         return {"type": "array", "items": _schema_of(args[0], components)}
@@ -108,7 +139,7 @@ def _tuple_schema(args: tuple[Any, ...], components: dict[str, Schema]) -> Schem
 
 
 # The serializers' `result` field: the typed result's JSON, null until the run succeeded.
-RESULT_FIELD: Schema = {"allOf": [{"$ref": REF_PREFIX + ROOT_NAME}], "nullable": True}
+RESULT_FIELD: Schema = nullable_ref({"$ref": REF_PREFIX + ROOT_NAME})
 
 
 def add_result_components(result: Schema, generator=None, request=None, public=None) -> Schema:

@@ -23,6 +23,7 @@ from webapp.api.result_schema import RESULT_FIELD
 from webapp.exercises.models import Exercise
 from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun, Recording
+from webapp.recordings.reading import reading_of, served_summary
 
 RUN_STATES = ["queued", "running", "succeeded", "failed"]
 
@@ -190,8 +191,11 @@ class RecordingSerializer(ApiModelSerializer):
 
     @extend_schema_field(RESULT_FIELD)
     def get_result(self, recording: Recording) -> dict | None:
+        """The result with the reading's verdicts (a therapist's label is the verdict)."""
         run = self.latest_run(recording)
-        return typed_json(run.summary) if run and run.status == "succeeded" else None
+        if run is None or run.status != "succeeded":
+            return None
+        return served_summary(run, reading_of(run))
 
     @extend_schema_field(RunSerializer(allow_null=True))
     def get_run(self, recording: Recording) -> dict | None:
@@ -221,8 +225,17 @@ class RecordingSummarySerializer(serializers.Serializer):
     status = serializers.ChoiceField(source="run_status", choices=RUN_STATES, allow_null=True)
     progress = serializers.IntegerField(source="run_progress", allow_null=True)
     score = RoundedFloatField(source="run_score", places=1, allow_null=True)
+    fits = serializers.BooleanField(
+        source="run_fits",
+        allow_null=True,
+        help_text="false: the recording does not show the exercise (no score, no repetition)",
+    )
     repetitions = serializers.IntegerField(source="run_repetitions", allow_null=True)
-    passed = serializers.IntegerField(source="run_passed", allow_null=True)
+    passed = serializers.IntegerField(
+        source="run_passed",
+        allow_null=True,
+        help_text="repetitions passed: the therapist's verdict first, then the analysis'",
+    )
     links = serializers.SerializerMethodField()
 
     @extend_schema_field(RecordingLinksSerializer)
@@ -232,7 +245,7 @@ class RecordingSummarySerializer(serializers.Serializer):
     def to_representation(self, instance):
         data = super().to_representation(instance)
         if data["status"] != "succeeded":  # figures only of a finished analysis
-            data["repetitions"] = data["passed"] = None
+            data["repetitions"] = data["passed"] = data["fits"] = None
         return data
 
 
@@ -243,8 +256,12 @@ class RecordingSummaryWithResultSerializer(RecordingSummarySerializer):
 
     @extend_schema_field(RESULT_FIELD)
     def get_result(self, recording: Recording) -> dict | None:
+        """The result with the reading's verdicts, as on the recording's own endpoint."""
         summary = getattr(recording, "run_summary", None)
-        return typed_json(summary) if recording.run_status == "succeeded" and summary else None
+        if recording.run_status != "succeeded" or not summary:
+            return None
+        run = AnalysisRun(pk=recording.run_id, status=recording.run_status, summary=summary)
+        return served_summary(run, getattr(recording, "run_reading", None))
 
 
 class RecordingUploadSerializer(serializers.Serializer):

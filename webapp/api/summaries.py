@@ -1,34 +1,18 @@
 """A page of recordings with their newest run's figures, in one query.
 
-Correlated subqueries read the newest run's id, status, progress and score columns and two small
-values the database extracts from its summary (the repetition count and how many passed), so
-neither the 10–20 kB summaries nor one query per recording reach Python. `with_result` adds the
-newest run's summary itself (`?fields=result`).
+Correlated subqueries read the newest run's id, status, progress and score columns and its
+reading's stored figures (`webapp.recordings.reading`: fits, repetition count, how many passed,
+the therapist's verdicts counted), so neither the 10–20 kB summaries nor one query per recording
+reach Python; rows whose run has no reading yet get it built (`reading.with_figures`, once).
+`with_result` adds the newest run's summary itself (`?fields=result`).
 """
 
 from __future__ import annotations
 
-from django.db.models import F, Func, IntegerField, OuterRef, QuerySet, Subquery
-from django.db.models.fields.json import KeyTransform
+from django.db.models import F, OuterRef, QuerySet, Subquery
 
 from webapp.recordings.models import AnalysisRun, Recording
-
-
-class PassedCount(Func):
-    """How many items of summary.repetitions have `"passed": true` (NULL without a summary)."""
-
-    output_field = IntegerField()
-    template = (
-        "(SELECT COUNT(*) FROM json_each(%(expressions)s, '$.repetitions') "
-        "WHERE json_extract(value, '$.passed') = 1)"
-    )
-
-    def as_postgresql(self, compiler, connection, **extra_context):
-        template = (
-            "JSONB_ARRAY_LENGTH(JSONB_PATH_QUERY_ARRAY(%(expressions)s, "
-            "'$.repetitions[*] ? (@.passed == true)'))"
-        )
-        return self.as_sql(compiler, connection, template=template, **extra_context)
+from webapp.recordings.reading import figure_annotations
 
 
 def recording_summaries(recordings: QuerySet[Recording], with_result: bool = False):
@@ -39,11 +23,7 @@ def recording_summaries(recordings: QuerySet[Recording], with_result: bool = Fal
         run_status=Subquery(newest.values("status")[:1]),
         run_progress=Subquery(newest.values("progress")[:1]),
         run_score=Subquery(newest.values("score")[:1]),
-        run_repetitions=Subquery(
-            newest.annotate(n=KeyTransform("repetition_count", "summary")).values("n")[:1],
-            output_field=IntegerField(),
-        ),
-        run_passed=Subquery(newest.annotate(n=PassedCount("summary")).values("n")[:1]),
+        **figure_annotations(newest),
     )
     if with_result:
         annotated = annotated.annotate(run_summary=Subquery(newest.values("summary")[:1]))

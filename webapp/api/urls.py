@@ -1,3 +1,4 @@
+from django.contrib.auth.views import redirect_to_login
 from django.urls import path
 from drf_spectacular.views import SpectacularAPIView, SpectacularSwaggerView
 from rest_framework.permissions import IsAuthenticated
@@ -6,6 +7,19 @@ from webapp.accounts import api as accounts_api
 from webapp.accounts.tokens import obtain_token
 from webapp.api import exports, goals, notes, prescriptions, views
 from webapp.live.api import LiveSessionCreate
+
+_swagger = SpectacularSwaggerView.as_view(
+    url_name="api-schema", permission_classes=[IsAuthenticated]
+)
+
+
+def api_docs(request):
+    """The Swagger page for whoever may read the schema (a sign-in or a token); an anonymous
+    browser is sent to the login page rather than shown a page whose schema request fails."""
+    if not request.user.is_authenticated and "HTTP_AUTHORIZATION" not in request.META:
+        return redirect_to_login(request.get_full_path())
+    return _swagger(request)
+
 
 urlpatterns = [
     path("v1/auth/token/", obtain_token, name="api-token"),
@@ -80,5 +94,6 @@ urlpatterns = [
         SpectacularAPIView.as_view(permission_classes=[IsAuthenticated]),
         name="api-schema",
     ),
-    path("docs/", SpectacularSwaggerView.as_view(url_name="api-schema"), name="api-docs"),
+    # The page that loads the schema asks for the same sign-in, never a page whose request fails.
+    path("docs/", api_docs, name="api-docs"),
 ]

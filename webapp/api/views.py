@@ -4,7 +4,7 @@ from django.core.exceptions import ValidationError as DjangoValidationError
 from django.http import Http404
 from django.utils.dateparse import parse_date
 from drf_spectacular.types import OpenApiTypes
-from drf_spectacular.utils import OpenApiParameter, extend_schema
+from drf_spectacular.utils import OpenApiParameter, PolymorphicProxySerializer, extend_schema
 from rest_framework import generics, status
 from rest_framework.exceptions import PermissionDenied, ValidationError
 from rest_framework.parsers import MultiPartParser
@@ -36,6 +36,7 @@ from webapp.patients.progress import progress_points_json
 from webapp.recordings import recovery, services
 from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import MoveForm, UploadForm
+from webapp.recordings.reading import readings_of, with_figures
 from webapp.recordings.recovery import check_analysable
 from webapp.recordings.results import result_data
 from webapp.recordings.uploads import accept_upload, check_skeleton
@@ -93,9 +94,25 @@ class PatientRecordings(generics.ListAPIView):
             return RecordingSummaryWithResultSerializer
         return RecordingSummarySerializer
 
+    def paginate_queryset(self, queryset):
+        """The page's rows, each with its newest run's reading figures (built once if missing);
+        with `?fields=result`, each with the reading whose verdicts its result carries."""
+        rows = with_figures(super().paginate_queryset(queryset))
+        if self.with_result():
+            found = readings_of(row.run_id for row in rows if row.run_status == "succeeded")
+            for row in rows:
+                row.run_reading = found.get(row.run_id)
+        return rows
+
     @extend_schema(
         parameters=[*DATE_FILTERS, FIELDS_PARAMETER],
-        responses=RecordingSummarySerializer(many=True),
+        # A summary, or with `?fields=result` a summary with its result: each closed, one fits.
+        responses=PolymorphicProxySerializer(
+            component_name="RecordingSummaryOrWithResult",
+            serializers=[RecordingSummarySerializer, RecordingSummaryWithResultSerializer],
+            resource_type_field_name=None,
+            many=True,
+        ),
     )
     def get(self, request, *args, **kwargs):
         return super().get(request, *args, **kwargs)
@@ -240,7 +257,10 @@ class RecordingCorrections(APIView):
         run = self.latest(request, pk)
         return Response(corrections_of(run) if run else {"run": None})
 
-    @extend_schema(request=dict, responses={200: responses.CorrectionsSavedSerializer})
+    @extend_schema(
+        request=responses.CorrectionsInputSerializer,
+        responses={200: responses.CorrectionsSavedSerializer},
+    )
     def post(self, request: Request, pk) -> Response:
         run = self.latest(request, pk)
         if run is None:

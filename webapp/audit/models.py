@@ -33,6 +33,8 @@ class AuditEvent(models.Model):
         UPDATE = "update", "Update"
         DELETE = "delete", "Delete"
         EXPORT = "export", "Export"
+        ARCHIVE = "archive", "Archive"
+        RESTORE = "restore", "Bring back"
 
     clinic = models.ForeignKey(Clinic, on_delete=models.PROTECT, related_name="+")
     user = models.ForeignKey(

@@ -47,7 +47,10 @@ def object_words(obj) -> str:
         return f"analysis of the {recording_words(obj.recording)}"
     if hasattr(obj, "run_id"):  # corrections and labels of one run
         return f"{kind_words(kind)} on the {recording_words(obj.run.recording)}"
-    return kind_words(kind)
+    if kind == "User":
+        return f"account of {obj.get_full_name() or obj.get_username()}"
+    name = getattr(obj, "name", "")  # an exercise, a clinic: the name the admin knows it by
+    return f"{kind_words(kind)} “{name}”" if isinstance(name, str) and name else kind_words(kind)
 
 
 def describe(obj) -> str:

@@ -20,16 +20,19 @@ from webapp.dashboard.precompute import read_page
 from webapp.patients.adherence import patient_adherence
 from webapp.patients.models import Patient, Prescription
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
+from webapp.recordings.reading import figure_annotations, with_figures
 
 RECENT_RECORDINGS = 10
 ACTIVE_RUNS = 20
 MY_PATIENTS = 8
 ATTENTION_PER_PAGE = 10
 ACTIVE = (RunStatus.QUEUED, RunStatus.RUNNING)
+NOT_THE_EXERCISE = "Does not show the exercise"
 
 
 def with_newest_run(recordings: QuerySet[Recording]) -> QuerySet[Recording]:
-    """Annotate each recording with its newest run's status, stage, progress and score."""
+    """Annotate each recording with its newest run's status, stage, progress and score, and its
+    reading's stored figures (fits, repetitions, passed: `webapp.recordings.reading`)."""
     newest = AnalysisRun.objects.filter(recording_id=OuterRef("pk")).order_by("-created_at")
     return recordings.annotate(
         run_id=Subquery(newest.values("pk")[:1]),
@@ -37,12 +40,24 @@ def with_newest_run(recordings: QuerySet[Recording]) -> QuerySet[Recording]:
         run_stage=Subquery(newest.values("stage")[:1]),
         run_progress=Subquery(newest.values("progress")[:1]),
         run_score=Subquery(newest.values("score")[:1]),
+        **figure_annotations(newest),
     )
+
+
+def status_words(recording: Recording) -> str | None:
+    """The list's word for the newest run: a finished analysis of a recording that does not show
+    its exercise says so (it has no score), never only "Succeeded"."""
+    if recording.run_status == RunStatus.SUCCEEDED and recording.run_fits is False:
+        return NOT_THE_EXERCISE
+    return RunStatus(recording.run_status).label if recording.run_status else None
 
 
 def recent_recordings(user: User, limit: int = RECENT_RECORDINGS) -> list[Recording]:
     recordings = visible_recordings(user).select_related("patient", "exercise")
-    return list(with_newest_run(recordings).order_by("-uploaded_at")[:limit])
+    rows = with_figures(with_newest_run(recordings).order_by("-uploaded_at")[:limit])
+    for row in rows:
+        row.status_words = status_words(row)
+    return rows
 
 
 def active_runs(user: User, limit: int = ACTIVE_RUNS) -> list[AnalysisRun]:
@@ -118,9 +133,12 @@ def recording_json(recording: Recording) -> dict[str, Any]:
         "exercise": recording.exercise.name if recording.exercise_id else None,
         "uploaded_at": timezone.localtime(recording.uploaded_at).strftime("%-d %b %Y %H:%M"),
         "status": recording.run_status,
-        "status_label": RunStatus(recording.run_status).label if recording.run_status else None,
+        "status_label": status_words(recording),
         "progress": recording.run_progress,
         "score": None if recording.run_score is None else round(recording.run_score),
+        "fits": recording.run_fits,
+        "passed": recording.run_passed,
+        "repetitions": recording.run_repetitions,
     }
 
 

@@ -1,9 +1,9 @@
 """A recording's result in the patient's words: what they did, what to change, what went well.
 
 The therapist's page shows every key pose, level and clinical range; a patient gets only the
-count of repetitions (all and done well), the one to three most important tips and the praise
-that concerns the body region the exercise trains (issue 24: no praise for an ankle in a
-shoulder exercise).
+count of repetitions (all and done well: the run's reading, `webapp.recordings.reading`), the
+one to three most important tips and the praise that concerns the body region the exercise
+trains (issue 24: no praise for an ankle in a shoulder exercise).
 """
 
 from __future__ import annotations
@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 from analysis.pipeline import AnalysisSummary
 from webapp.exercises.models import Exercise
+from webapp.recordings.models import RunReading
+from webapp.recordings.reading import repetition_rows, to_correct
 from webapp.recordings.words import body_part
 
 MAX_TIPS = 3
@@ -68,11 +70,18 @@ def relevant_praise(sentences: Iterable[str], regions: set[str]) -> tuple[str, .
     return tuple(s for s in sentences if not regions_of(s) or regions_of(s) & regions)
 
 
-def lay_result(result: AnalysisSummary, exercise: Exercise | None) -> LayResult:
-    """The patient's summary of one finished analysis."""
+def lay_result(
+    result: AnalysisSummary, exercise: Exercise | None, reading: RunReading | None = None
+) -> LayResult:
+    """The patient's summary of one finished analysis, as its run's ``reading`` says it (the
+    therapist's verdicts first); a result without a run is read by the same rule, unlabelled."""
     if not result.match.fits:
         return LayResult(0, 0, fits=False, message=result.match.message)
-    well = sum(1 for rep in result.repetitions if rep.score >= result.pass_threshold)
-    tips = tuple(c.text for c in result.advice.corrections[:MAX_TIPS])
+    if reading is None:
+        rows = repetition_rows(result, [], {})
+        well, tips = sum(row["passed"] for row in rows), to_correct(result, rows)
+    else:
+        well, tips = reading.passed_count, reading.statements.get("to_correct", [])
+    tips = tuple(tips[:MAX_TIPS])
     praise = relevant_praise(result.advice.went_well, exercise_regions(exercise, result))
     return LayResult(result.repetition_count, well, tips, praise)

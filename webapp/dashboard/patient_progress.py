@@ -12,16 +12,18 @@ from typing import Any
 
 from django.contrib.auth.decorators import login_required
 from django.core.exceptions import PermissionDenied
+from django.db.models import Prefetch
 from django.http import Http404, HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import get_object_or_404, render
 from django.views.decorators.http import require_GET
 
-from analysis.pipeline import AnalysisSummary
 from webapp.accounts.permissions import visible_exercises, visible_patients
 from webapp.exercises.annotate_data import tutor_pose
 from webapp.patients.goals import ADHERENCE, SCORE, measure_label, patient_goal_statuses
 from webapp.patients.models import Patient
+from webapp.recordings.models import AnalysisRun
 from webapp.recordings.prescribed import prescribed_exercises
+from webapp.recordings.reading import readings_of
 
 SESSIONS_SHOWN = 10  # per exercise: the chart stays readable on a phone
 
@@ -37,22 +39,27 @@ def own_patient(request: HttpRequest) -> Patient:
 
 
 def session_rows(patient: Patient) -> dict[str, list[dict[str, Any]]]:
-    """Per exercise name, its analysed sessions oldest first: date, repetitions, done well."""
+    """Per exercise name, its analysed sessions oldest first: date, repetitions, done well (the
+    runs' readings: one query for all, whatever the number of sessions)."""
     recordings = (
         patient.recordings.filter(exercise__isnull=False)
         .select_related("exercise")
-        .prefetch_related("runs")
+        .prefetch_related(Prefetch("runs", queryset=AnalysisRun.objects.defer("summary")))
         .order_by("uploaded_at")
     )
     found: dict[str, list[dict[str, Any]]] = defaultdict(list)
-    for recording in recordings:
-        run = recording.latest_succeeded_run()
-        result: AnalysisSummary | None = run.result if run is not None else None
-        if result is None or not result.match.fits:
+    newest = {recording: recording.latest_succeeded_run() for recording in recordings}
+    readings = readings_of(run.pk for run in newest.values() if run is not None)
+    for recording, run in newest.items():
+        reading = readings.get(run.pk) if run is not None else None
+        if reading is None or not reading.fits:
             continue  # a recording that did not show the exercise has no repetitions to count
-        well = sum(1 for rep in result.repetitions if rep.score >= result.pass_threshold)
         found[recording.exercise.name].append(
-            {"recording": recording, "done": result.repetition_count, "well": well}
+            {
+                "recording": recording,
+                "done": reading.repetition_count,
+                "well": reading.passed_count,
+            }
         )
     return {name: rows[-SESSIONS_SHOWN:] for name, rows in found.items()}
 

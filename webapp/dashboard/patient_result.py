@@ -17,6 +17,7 @@ from webapp.dashboard.lay_words import lay_result
 from webapp.recordings.forms import EffortForm
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 from webapp.recordings.notes import notes_of
+from webapp.recordings.reading import reading_of
 
 
 def last_session(recent: list[Recording]) -> dict[str, Any] | None:
@@ -27,8 +28,9 @@ def last_session(recent: list[Recording]) -> dict[str, Any] | None:
     newest = recent[0]
     lay = None
     if newest.run_status == RunStatus.SUCCEEDED:
-        result = AnalysisRun.objects.only("summary").get(pk=newest.run_id).result
-        lay = lay_result(result, newest.exercise) if result is not None else None
+        run = AnalysisRun.objects.select_related("reading").get(pk=newest.run_id)
+        result = run.result
+        lay = lay_result(result, newest.exercise, reading_of(run)) if result is not None else None
     return {"recording": newest, "lay": lay}
 
 
@@ -39,7 +41,7 @@ def page(
     run = recording.runs.first()
     lay = None
     if run is not None and run.status == RunStatus.SUCCEEDED and run.result is not None:
-        lay = lay_result(run.result, recording.exercise)
+        lay = lay_result(run.result, recording.exercise, reading_of(run))
     context = {
         "recording": recording,
         "run": run,

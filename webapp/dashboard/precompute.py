@@ -63,11 +63,19 @@ def refresh_patient(patient_id: Any, clinic_id: Any) -> bool:
 def refresh_after_run(run_id: Any) -> None:
     """The update on write: never lets a problem here fail the run that triggered it.
 
-    Also stores the run's progress point when it succeeded (`webapp.patients.progress_store`).
+    Also builds the run's reading (`webapp.recordings.reading`: its verdicts, pass count and
+    statements, read by every page, list and export) and stores its progress point when it
+    succeeded (`webapp.patients.progress_store`).
     """
     from webapp.patients.progress_store import store_after_run
     from webapp.recordings.models import AnalysisRun
+    from webapp.recordings.reading import build_for
 
+    try:
+        with transaction.atomic():
+            build_for(run_id)
+    except Exception:  # the first reader builds it
+        log.exception("reading not built after run %s", run_id)
     try:
         with transaction.atomic():
             store_after_run(run_id)

@@ -7,6 +7,7 @@ Idempotent: loading twice keeps existing rows and never duplicates them.
 from __future__ import annotations
 
 import csv
+import gzip
 import hashlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,6 +16,8 @@ from django.conf import settings
 from django.core.files.base import ContentFile
 from django.db import transaction
 
+from analysis.bvh import read
+from analysis.pipeline.model_fit import moving_joints
 from webapp.accounts.models import Clinic, Role, User
 from webapp.demo.recordings import DemoRecording, load_recordings
 from webapp.exercises.models import Exercise
@@ -35,8 +38,13 @@ class DemoExercise:
 DEMO_EXERCISES = (
     DemoExercise("m01", "Deep squat", "Overhead deep squat holding a dowel; heels stay down."),
     DemoExercise("m05", "Sit to stand", "Stand up from a chair and sit down again, arms crossed."),
+    # The reference raises the arm to about 140° (well above the shoulder): the description says
+    # so, or a patient who stops at shoulder height is told to go about 60° higher.
     DemoExercise(
-        "m07", "Shoulder abduction", "Raise the arm sideways to shoulder height and lower it."
+        "m07",
+        "Shoulder abduction",
+        "Raise the arm out to the side, up past shoulder height as far as is comfortable, "
+        "and lower it slowly.",
     ),
 )
 
@@ -84,6 +92,9 @@ def ensure_exercise(clinic: Clinic, spec: DemoExercise) -> Exercise:
     relative = f"sessions/{spec.code}_s01_correct.bvh.gz"
     content = (UI_PRMD / relative).read_bytes()
     frames, types = tutor_landmarks(relative)
+    # The body parts the model trains are ticked on the exercise page, as a therapist would tick
+    # them: those that move between the reference's key poses (what the build picks unticked).
+    involved = moving_joints(read(gzip.decompress(content)), frames, types)
     exercise = Exercise(
         clinic=clinic,
         name=spec.name,
@@ -92,23 +103,31 @@ def ensure_exercise(clinic: Clinic, spec: DemoExercise) -> Exercise:
         tutor_landmark_frames=frames,
         tutor_landmark_types=types,
         landmark_type_names=LANDMARK_TYPE_NAMES,
+        involved_joints=involved,
     )
     exercise.tutor_file.save(f"{spec.code}_tutor.bvh.gz", ContentFile(content), save=False)
     exercise.save()
     return exercise
 
 
+# (username, password): published, so the loader runs only where DEMO_ALLOWED says so.
+DEMO_ACCOUNTS = (
+    ("demo-therapist", "demo-therapist-pw"),
+    ("demo-patient", "demo-patient-pw"),
+    ("demo-admin", "demo-admin-pw"),
+)
+
+
 @transaction.atomic
 def load_demo_clinic() -> Clinic:
     clinic, _ = Clinic.objects.get_or_create(name=DEMO_CLINIC)
-    therapist = ensure_user(
-        "demo-therapist", "demo-therapist-pw", clinic, Role.THERAPIST, "Dana Therapist"
+    (therapist_name, therapist_pw), (patient_name, patient_pw), (admin_name, admin_pw) = (
+        DEMO_ACCOUNTS
     )
+    therapist = ensure_user(therapist_name, therapist_pw, clinic, Role.THERAPIST, "Dana Therapist")
     # The clinic admin reads the audit log and manages every token of the clinic.
-    ensure_user("demo-admin", "demo-admin-pw", clinic, Role.CLINIC_ADMIN, "Alex Admin")
-    patient_user = ensure_user(
-        "demo-patient", "demo-patient-pw", clinic, Role.PATIENT, "Pat Patient"
-    )
+    ensure_user(admin_name, admin_pw, clinic, Role.CLINIC_ADMIN, "Alex Admin")
+    patient_user = ensure_user(patient_name, patient_pw, clinic, Role.PATIENT, "Pat Patient")
     patient, _ = Patient.objects.get_or_create(
         clinic=clinic, user=patient_user, defaults={"display_name": "Pat Patient"}
     )

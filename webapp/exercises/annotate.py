@@ -11,6 +11,7 @@ the therapist types (line and column of the first error) and saves it when asked
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable
 from functools import wraps
 
@@ -25,6 +26,7 @@ from analysis.feedback import GrammarError, check_names
 from analysis.landmarks import suggest_key_poses
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
 from webapp.audit import log
+from webapp.exercises import services
 from webapp.exercises.annotate_data import (
     angle_curves,
     default_grammar_text,
@@ -108,7 +110,9 @@ def add_rule(request: HttpRequest, pk) -> HttpResponse:
     """The picked rule appended to the exercise's rules, saved when the whole text is valid."""
     exercise = get_exercise_for_user(request, pk)
     form = RuleForm(request.POST, exercise=exercise, skeleton=exercise.tutor_motion().skeleton)
-    if form.is_valid():
+    if form.is_valid() and already_there(shown_grammar(exercise)[0], form.rule_text()):
+        form.add_error(None, "This rule is already in the feedback rules: nothing was added.")
+    elif form.is_valid():
         text = appended(shown_grammar(exercise)[0], form.rule_text())
         verdict = grammar_verdict(text, exercise)
         if verdict["valid"]:
@@ -175,7 +179,11 @@ def save_landmarks(request: HttpRequest, pk) -> JsonResponse:
     exercise.involved_joints = sorted({chosen[j] for j in data.get("involved_joints") or []})
     exercise.save()
     log.record(request, "update", exercise)
-    return JsonResponse({"saved": True, "landmark_frames": exercise.tutor_landmark_frames})
+    built = services.confirm_key_poses(exercise)  # a replaced reference's, once confirmed
+    message = f"Saved. Model version {built.version} is being built from them." if built else ""
+    return JsonResponse(
+        {"saved": True, "landmark_frames": exercise.tutor_landmark_frames, "message": message}
+    )
 
 
 def kept_type_names(posted: dict, earlier: dict, types: list[int]) -> dict[str, str]:
@@ -193,17 +201,36 @@ def kept_type_names(posted: dict, earlier: dict, types: list[int]) -> dict[str, 
 def grammar_verdict(text: str, exercise: Exercise) -> dict:
     """Whether the grammar parses and names only the exercise's body parts (as the grammar
     writes them) and key-pose types; else the first problem with its line and column."""
-    written = grammar_names(tuple(exercise.tutor_motion().skeleton.names))
+    skeleton = exercise.tutor_motion().skeleton
+    written = grammar_names(tuple(skeleton.names))
     try:
         rules = check_names(text, sorted(set(written.values())), type_names(exercise))
     except GrammarError as error:
         return {
             "valid": False,
-            "message": error.message,
+            "message": in_tick_words(error.message, written, plain_labels(skeleton)),
             "line": error.line,
             "column": error.column,
         }
     return {"valid": True, "rules": len(rules)}
+
+
+def already_there(grammar: str, rule: str) -> bool:
+    """Whether the rule is already a line of the rules (spaces aside)."""
+    squeeze = "".join
+    return squeeze(rule.split()) in {squeeze(line.split()) for line in grammar.splitlines()}
+
+
+def in_tick_words(message: str, written: dict[str, str], labels: dict[str, str]) -> str:
+    """A rule error's body-part names followed by the words the body-part ticks use, where they
+    differ ("waist (the hips)"), so the message and the ticks name one body part alike."""
+    for joint, name in sorted(written.items(), key=lambda item: -len(item[1])):
+        tick = labels.get(joint, "")
+        if tick and tick != name.replace("_", " "):
+            message = re.sub(
+                rf"(?<![\w$@]){re.escape(name)}(?!\w)", f"{name} (the {tick})", message
+            )
+    return message
 
 
 @login_required

@@ -35,6 +35,9 @@ class Exercise(models.Model):
     # {"1": "start", "2": "end of range"}: names shown to therapists and used in feedback.
     landmark_type_names = models.JSONField(default=dict, blank=True)
     involved_joints = models.JSONField(default=list, blank=True)
+    # A replaced reference's key poses are suggested from its own recording: no model version is
+    # built from them (the previous one stays in use) until the therapist confirms them.
+    key_poses_to_confirm = models.BooleanField(default=False)
     feedback_grammar = models.TextField(blank=True)
     active_model = models.ForeignKey(
         "exercises.ExerciseModel",
@@ -139,7 +142,9 @@ class Exercise(models.Model):
         ones when they fit its length, else the suggested ones (the page asks to check them).
         Joints the new reference lacks are dropped. True when the marked ones were kept."""
         frames = list(self.tutor_landmark_frames)
+        # A replaced reference never keeps the frames marked on the old recording.
         kept = bool(frames) and max(frames) < motion.frames.shape[0]
+        kept = kept and not self.key_poses_to_confirm
         if not kept:
             suggestion = suggest_key_poses(motion)
             earlier = self.landmark_type_names or {}

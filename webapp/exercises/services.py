@@ -49,17 +49,29 @@ def create_exercise(exercise: Exercise, parsed: ParsedUpload) -> None:
             start_model_build(exercise)
 
 
-def replace_reference(exercise: Exercise, parsed: ParsedUpload) -> ExerciseModel:
-    """Store a new reference recording and build a new model version from it.
+def replace_reference(exercise: Exercise, parsed: ParsedUpload) -> ExerciseModel | None:
+    """Store a new reference recording with key poses suggested from it, to be confirmed.
 
-    The earlier file and model versions stay: analyses keep the version they were made with.
-    Until the new version is ready no version is active, so a new analysis never uses a model
-    of the old reference (it builds from the new one if it comes first). A video's key poses
-    are checked when the worker has read it (`Exercise.read_video_tutor`)."""
+    The earlier file and model versions stay, and the active version stays in use: no version is
+    built from the new reference until the therapist confirms its key poses
+    (`confirm_key_poses`), never from frames marked on the old recording. A video is read by a
+    model build first (its key poses are suggested then: `Exercise.read_video_tutor`); that
+    version is not made active (workers.exercise_models.build_version)."""
     with transaction.atomic():
         save_reference(exercise, parsed, f"{exercise.pk}-{parsed.checksum[:12]}")
+        exercise.key_poses_to_confirm = True
         if parsed.motion is not None:
             exercise.take_key_poses(parsed.motion)
-        exercise.active_model = None
         exercise.save()
+        return start_model_build(exercise) if exercise.tutor_is_video else None
+
+
+def confirm_key_poses(exercise: Exercise) -> ExerciseModel | None:
+    """The therapist saved the key poses of a replaced reference: build the version that
+    replaces the one in use (None when nothing was waiting for a confirmation)."""
+    if not exercise.key_poses_to_confirm:
+        return None
+    with transaction.atomic():
+        Exercise.objects.filter(pk=exercise.pk).update(key_poses_to_confirm=False)
+        exercise.key_poses_to_confirm = False
         return start_model_build(exercise)

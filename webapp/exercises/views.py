@@ -108,7 +108,9 @@ def shown_model(exercise: Exercise, wanted: str | None) -> ExerciseModel | None:
 def build_model(request: HttpRequest, pk) -> HttpResponse:
     exercise = get_exercise_for_user(request, pk)
     if not exercise.tutor_landmark_frames:
-        messages.error(request, "Mark the tutor's key poses before building the model.")
+        messages.error(request, "Mark the reference's key poses before building the model.")
+    elif exercise.key_poses_to_confirm:
+        messages.error(request, "Check and save the new reference's key poses first.")
     else:
         row = services.start_model_build(exercise)
         messages.success(request, f"Building model version {row.version}.")
@@ -156,7 +158,7 @@ def exercise_archive(request: HttpRequest, pk) -> HttpResponse:
         return render(request, "exercises/archive.html", {"exercise": exercise})
     exercise.archived_at = None if exercise.archived_at else timezone.now()
     exercise.save(update_fields=["archived_at"])
-    log.record(request, "update", exercise)
+    log.record(request, "archive" if exercise.archived_at else "restore", exercise)
     if exercise.archived_at:
         messages.success(
             request,
@@ -174,31 +176,35 @@ def replace_reference(request: HttpRequest, pk) -> HttpResponse:
     exercise = get_exercise_for_user(request, pk)
     form = ReferenceForm(request.POST or None, request.FILES or None)
     if request.method == "POST" and form.is_valid():
-        row = services.replace_reference(exercise, form.parsed)
+        services.replace_reference(exercise, form.parsed)
         log.record(request, "update", exercise)
-        messages.success(request, replaced_message(exercise, row.version))
-        return redirect("exercises:detail", pk=exercise.pk)
+        messages.success(request, replaced_message(exercise))
+        return redirect("exercises:annotate", pk=exercise.pk)
     status = 400 if request.method == "POST" else 200
     context = {
         "form": form,
         "title": f"Replace the reference of {exercise.name}",
-        "intro": "A new model version is built from the new reference. Results of recordings "
-        "already analysed keep the version they were made with; new analyses use the new one.",
+        "intro": "Key poses are suggested from the new reference for you to check. The model "
+        "in use now stays in use until you save them; a new version is then built from them. "
+        "Results of recordings already analysed keep the version they were made with.",
         "submit": "Replace the reference",
         "exercise": exercise,
     }
     return render(request, "exercises/form.html", context, status=status)
 
 
-def replaced_message(exercise: Exercise, version: int) -> str:
+def replaced_message(exercise: Exercise) -> str:
     reading = (
-        "The video is read first (about a minute for a minute of video); "
+        "The video is read first (about a minute for a minute of video); its key poses are then "
+        "suggested here. "
         if exercise.tutor_is_video
-        else ""
+        else "Key poses are suggested from it below. "
     )
+    in_use = exercise.active_model
+    keeps = f"model version {in_use.version} stays in use" if in_use else "no model is in use"
     return (
-        f"New reference saved; {reading}model version {version} is built from it. "
-        "Earlier results keep the version they were made with. Check the key poses."
+        f"New reference saved. {reading}Check them and save them: until then {keeps}; the key "
+        "poses you save build the new version."
     )
 
 

@@ -1,4 +1,5 @@
-"""The guide for clinics, rendered from the Markdown file the repository keeps (docs/GUIDE.md).
+"""The guides, rendered from the Markdown files the repository keeps: docs/GUIDE.md for clinics,
+docs/PATIENT_GUIDE.md for patients (in their words, no therapist's work).
 
 The same file reads well on GitHub and in the site: its screenshots are linked as ``img/...``,
 which resolves to ``docs/img/`` there and to ``/help/img/`` here.
@@ -19,6 +20,7 @@ from django.utils.safestring import SafeString, mark_safe
 
 DOCS = Path(settings.BASE_DIR) / "docs"
 GUIDE = DOCS / "GUIDE.md"
+PATIENT_GUIDE = DOCS / "PATIENT_GUIDE.md"
 PLAIN_500 = (
     "<!doctype html><title>Server error</title><h1>Something went wrong on our side</h1>"
     '<p>The error has been logged. <a href="/">Back to the home page</a></p>'
@@ -34,12 +36,18 @@ def _rendered(path: Path, mtime_ns: int) -> SafeString:
     return mark_safe(html)
 
 
-def guide_html() -> SafeString:
-    return _rendered(GUIDE, GUIDE.stat().st_mtime_ns)
+def guide_html(path: Path = GUIDE) -> SafeString:
+    return _rendered(path, path.stat().st_mtime_ns)
 
 
 def guide(request: HttpRequest) -> HttpResponse:
-    return render(request, "help/guide.html", {"guide": guide_html()})
+    """The patients' guide to a patient (what to do, how to record, what the words mean), the
+    clinics' guide to everyone else."""
+    if getattr(request.user, "is_patient", False):
+        context = {"guide": guide_html(PATIENT_GUIDE), "title": "Help"}
+    else:
+        context = {"guide": guide_html(GUIDE), "title": "Guide for clinics"}
+    return render(request, "help/guide.html", context)
 
 
 def guide_image(request: HttpRequest, name: str) -> FileResponse:

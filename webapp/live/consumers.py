@@ -50,7 +50,7 @@ from analysis.live import header_text
 from analysis.live.frames import VERSION as BINARY_VERSION
 from analysis.live.frames import decode_frames, take_frames
 from analysis.live.session import ProtocolError, error_event
-from webapp.live import services
+from webapp.live import camera, services
 from webapp.live.auth import scope_user
 from webapp.live.models import LiveSession, LiveStatus
 
@@ -156,7 +156,9 @@ class LiveConsumer(AsyncWebsocketConsumer):
     async def process(self, message: Any, received: float) -> None:
         """Answer one JSON message: to this connection, and to the group's other connections."""
         state = await self._state_or_error()
-        if state is not None:
+        if state is not None and camera.is_camera_start(message):
+            await self._answer(state, camera.start(self.key, state, message), received, batch=False)
+        elif state is not None:
             batch = isinstance(message, dict) and message.get("type") == "frames"
             await self._answer(state, state.handle(message), received, batch=batch)
 
@@ -168,7 +170,12 @@ class LiveConsumer(AsyncWebsocketConsumer):
             await self.send_json(error_event(error))
             return
         state = await self._state_or_error()
-        if state is not None:
+        stream = camera.CAMERAS.get(self.key)
+        if state is not None and stream is not None:  # landmarks from the camera page
+            events = camera.take(state, stream, block)
+            camera.with_reference(state, events)
+            await self._answer(state, events, received, batch=True)
+        elif state is not None:
             await self._answer(state, take_frames(state, block), received, batch=True)
 
     async def _answer(
@@ -209,6 +216,9 @@ class LiveConsumer(AsyncWebsocketConsumer):
         error when the exercise's model cannot be had."""
         try:
             return await self._state()
+        except services.SessionEndedError as error:
+            await self.send_json(_error("ended", str(error)))
+            return None
         except (AnalysisInputError, ValueError) as error:
             await self.send_json(_error("bad-header", " ".join(str(error).split())))
             return None
@@ -216,6 +226,9 @@ class LiveConsumer(AsyncWebsocketConsumer):
     async def _state(self) -> SessionState:
         state = SESSIONS.get(self.key)
         if state is None:
+            # an ended session stays ended: frames sent to it again would re-open it and store
+            # a second recording under the first one's name
+            await database_sync_to_async(services.refuse_if_ended)(self.key)
             model = await database_sync_to_async(services.exercise_model)(self.live.exercise)
             state = SESSIONS.setdefault(
                 self.key,
@@ -230,9 +243,15 @@ class LiveConsumer(AsyncWebsocketConsumer):
         lat = sorted(state.delivery_ms)
         if lat:
             closing["latency_ms_p95"] = lat[min(len(lat) - 1, int(0.95 * len(lat)))]
-        recording = await database_sync_to_async(services.store_frames)(
-            self.live, state.bvh(), self.user
-        )
+        stream = camera.forget(self.key)
+        if stream is not None:  # the camera's landmarks are the recording (a MediaPipe file)
+            recording = await database_sync_to_async(services.store_landmarks)(
+                self.live, stream.recording_json(), len(stream.landmarks), self.user
+            )
+        else:
+            recording = await database_sync_to_async(services.store_frames)(
+                self.live, state.bvh(), self.user
+            )
         closing["recording"] = None if recording is None else str(recording.pk)
         await database_sync_to_async(services.finish)(self.live, closing, recording)
         SESSIONS.pop(self.key, None)

@@ -8,6 +8,8 @@ import hashlib
 from collections.abc import Iterable
 from typing import Any
 
+from django.core.exceptions import ValidationError
+from django.core.files.uploadedfile import SimpleUploadedFile
 from django.db import transaction
 from django.db.models import Q, QuerySet
 from django.utils import timezone
@@ -22,7 +24,7 @@ from webapp.live.models import LiveSession, LiveStatus
 from webapp.patients.models import Patient, Prescription
 from webapp.recordings.models import Recording
 from webapp.recordings.storage import read_verified
-from webapp.recordings.uploads import MIN_FRAMES, ParsedUpload, store_recording
+from webapp.recordings.uploads import MIN_FRAMES, ParsedUpload, parse_upload, store_recording
 from workers.exercise_models import NoUsableModelError, load_active
 
 
@@ -86,6 +88,19 @@ def exercise_model(exercise: Exercise) -> FittedModel:
 # dropped network, a closed laptop): it leaves the list of sessions under way.
 STALE_AFTER = datetime.timedelta(minutes=2)
 UNDER_WAY_LIMIT = 20
+
+
+class SessionEndedError(ValueError):
+    """Frames for a session that has ended: it is not re-opened (a second recording would be
+    stored under the first one's name); a new session is started instead."""
+
+
+ENDED = "This session has ended and its recording is saved; start a new session to go on."
+
+
+def refuse_if_ended(session_id: Any) -> None:
+    if LiveSession.objects.filter(pk=session_id, status=LiveStatus.ENDED).exists():
+        raise SessionEndedError(ENDED)
 
 
 def mark_live(live: LiveSession) -> None:
@@ -157,6 +172,25 @@ def store_frames(live: LiveSession, bvh_text: str | None, user: User | None) -> 
     recording, _ = store_recording(
         parsed, patient=live.patient, exercise=live.exercise, user=user or live.created_by,
         note="Recorded in a live session.",
+    )  # fmt: skip
+    return recording
+
+
+def store_landmarks(
+    live: LiveSession, content: bytes, frames: int, user: User | None
+) -> Recording | None:
+    """A camera session's landmarks as a Recording: a MediaPipe landmark file, read and analysed
+    like an uploaded one; None for too few frames (nobody was in view long enough)."""
+    if frames < MIN_FRAMES:
+        return None
+    name = f"camera-{timezone.localtime(live.created_at):%Y%m%d-%H%M%S}.json"
+    try:
+        parsed = parse_upload(SimpleUploadedFile(name, content), any_source=True)
+    except ValidationError:
+        return None  # the landmarks never formed a body the reader accepts
+    recording, _ = store_recording(
+        parsed, patient=live.patient, exercise=live.exercise, user=user or live.created_by,
+        note="Recorded live with the camera.",
     )  # fmt: skip
     return recording
 

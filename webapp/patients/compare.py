@@ -1,10 +1,11 @@
 """The compare page: two analysed recordings of one patient side by side.
 
 ``/patients/{id}/compare/?a={recording id}&b={recording id}`` (a contract). Each side shows its
-summary, its per-repetition scores, its corrections (what to correct, and the therapist's own
-corrections of the analysis), and the clinical angles of both are set in one table with the
-difference b − a. Without a or b the page offers two selects, b the newest analysed recording
-and a the first one of the same exercise. Both recordings must be the patient's (else 404).
+run's reading (`webapp.recordings.reading`): summary, per-repetition scores and verdicts, what to
+correct, and the therapist's own corrections of the analysis; the clinical angles of both are
+set in one table with the difference b − a. Without a or b the page offers two selects, b the
+newest analysed recording and a the first one of the same exercise. Both recordings must be
+the patient's (else 404).
 """
 
 from __future__ import annotations
@@ -22,8 +23,8 @@ from analysis.pipeline.results import AnalysisSummary
 from webapp.accounts.permissions import get_patient_for_user, get_recording_for_user
 from webapp.patients.models import Patient
 from webapp.recordings.clinical import involved_joints
-from webapp.recordings.corrections import corrections_of
 from webapp.recordings.models import Recording, RunStatus
+from webapp.recordings.reading import reading_of
 
 
 def analysed_recordings(patient: Patient) -> QuerySet[Recording]:
@@ -63,56 +64,27 @@ def recording_of(request: HttpRequest, patient: Patient, pk: str) -> Recording:
     return recording
 
 
-def repetition_verdicts(result: AnalysisSummary, corrections: dict[str, Any]) -> list[bool]:
-    """Passed or not, per repetition: the therapist's verdict where they gave one, else the
-    stored one; runs that stored none are judged by the score against the threshold."""
-    given = {item["index"]: item["passed"] for item in corrections["repetitions"]}
-    verdicts = []
-    for i, rep in enumerate(result.repetitions):
-        passed = rep.passed if rep.passed is not None else rep.score >= result.pass_threshold
-        verdicts.append(given.get(i, passed))
-    return verdicts
-
-
-def therapist_changes(found: dict[str, Any]) -> list[str]:
-    """The therapist's corrections of an analysis (`corrections_of`), in plain words."""
-    changes = []
-    if found["landmarks"]:
-        changes.append("The key poses were placed again by the therapist.")
-    if found["levels"]:
-        changes.append(f"{len(found['levels'])} joint assessment(s) changed by the therapist.")
-    for item in found["repetitions"]:
-        verdict = "passed" if item["passed"] else "not passed"
-        changes.append(f"Repetition {item['index'] + 1} marked {verdict} by the therapist.")
-    return changes
-
-
-def advice_texts(result: AnalysisSummary) -> list[str]:
-    """What to correct, as the recording page says it (older runs: their feedback)."""
-    if result.advice.corrections or result.advice.went_well:
-        return [item.text for item in result.advice.corrections]
-    return [comment.text for comment in result.feedback]
-
-
 def side_of(recording: Recording, letter: str) -> dict[str, Any]:
+    """One side: the recording's newest succeeded run as its reading says it (verdicts with the
+    therapist's labels first, the pass count, what to correct, what the therapist changed)."""
     run = recording.latest_succeeded_run()
     side: dict[str, Any] = {"letter": letter, "recording": recording, "run": run}
-    if run is None or run.result is None:
+    reading = reading_of(run)
+    if reading is None:
         return side
-    result, corrections = run.result, corrections_of(run)
-    verdicts = repetition_verdicts(result, corrections)
+    said = reading.statements
     side.update(
-        result=result,
-        fits=result.match.fits,
-        score=result.score,
-        done=result.repetition_count,
-        passed=sum(verdicts),
+        result=run.result,
+        fits=reading.fits,
+        score=reading.score,
+        done=reading.repetition_count,
+        passed=reading.passed_count,
         repetitions=[
-            {"number": i + 1, "score": rep.score, "passed": verdict}
-            for i, (rep, verdict) in enumerate(zip(result.repetitions, verdicts, strict=True))
+            {"number": row["number"], "score": row["shown_score"], "passed": row["passed"]}
+            for row in reading.repetitions
         ],
-        to_correct=advice_texts(result),
-        therapist_changes=therapist_changes(corrections),
+        to_correct=said.get("to_correct", []),
+        therapist_changes=said.get("therapist", []),
     )
     return side
 

@@ -6,6 +6,9 @@ from webapp.exercises.models import Exercise
 from webapp.patients.dosage import DAY_NAMES
 from webapp.patients.models import DOSAGE_LIMITS, WEEKDAYS, Patient, Prescription
 
+# A date input reads and sends only ISO dates (2027-09-01): a "09/01/2027" value is dropped
+# by the browser and the form then sends nothing.
+ISO_DATE = "%Y-%m-%d"
 DAY_CHOICES = list(zip(WEEKDAYS, DAY_NAMES, strict=True))
 
 
@@ -13,7 +16,7 @@ class PatientForm(forms.ModelForm):
     class Meta:
         model = Patient
         fields = ["display_name", "date_of_birth", "notes", "send_reminders", "email"]
-        widgets = {"date_of_birth": forms.DateInput(attrs={"type": "date"})}
+        widgets = {"date_of_birth": forms.DateInput(attrs={"type": "date"}, format=ISO_DATE)}
         labels = {
             "send_reminders": "E-mail the patient a reminder when they fall behind this week",
             "email": "Patient's e-mail address for reminders",
@@ -57,8 +60,8 @@ class PrescriptionForm(forms.ModelForm):
             "sessions_per_week": "Leave empty to use the number of days chosen below.",
         }
         widgets = {
-            "start_date": forms.DateInput(attrs={"type": "date"}),
-            "end_date": forms.DateInput(attrs={"type": "date"}),
+            "start_date": forms.DateInput(attrs={"type": "date"}, format=ISO_DATE),
+            "end_date": forms.DateInput(attrs={"type": "date"}, format=ISO_DATE),
         }
 
     def __init__(self, *args, clinic, **kwargs):

@@ -20,6 +20,7 @@ from django.views.decorators.http import require_POST
 from webapp.accounts.permissions import get_patient_for_user, require_staff, visible_exercises
 from webapp.audit import log
 from webapp.dashboard.precompute import refresh_patient
+from webapp.patients.forms import ISO_DATE
 from webapp.patients.goals import FINITE, MEASURES, measure_label, target_error, unit_of
 from webapp.patients.models import Goal, Patient
 
@@ -30,7 +31,9 @@ class GoalForm(forms.Form):
     exercise = forms.ModelChoiceField(queryset=None, empty_label=None)
     measure = forms.ChoiceField(choices=MEASURE_CHOICES, label="What to reach")
     target = forms.FloatField(label="Target", error_messages={"invalid": FINITE})
-    by = forms.DateField(label="By", widget=forms.DateInput(attrs={"type": "date"}))
+    by = forms.DateField(
+        label="By", widget=forms.DateInput(attrs={"type": "date"}, format=ISO_DATE)
+    )
 
     def __init__(self, *args, exercises, **kwargs):
         super().__init__(*args, **kwargs)

@@ -36,6 +36,7 @@ from django.utils.dateformat import format as format_date
 
 from analysis.clinical import ANGLE_NAMES
 from analysis.clinical.labels import angle_label
+from analysis.clinical.norms import limits_for
 from webapp.patients.models import Goal, Patient
 from webapp.patients.progress_store import store_points
 from webapp.recordings.models import AnalysisRun, RunStatus
@@ -66,10 +67,25 @@ def target_error(measure: str, target: float) -> str:
     """A plain message when the target is not a finite number in the measure's range."""
     if not math.isfinite(target):
         return FINITE
-    low, high = TARGET_LIMITS[measure if measure in (SCORE, ADHERENCE) else "angle"]
+    if measure not in (SCORE, ADHERENCE):
+        return angle_target_error(measure, target)
+    low, high = TARGET_LIMITS[measure]
     if not low <= target <= high:
         return f"The target must be between {low:g} and {high:g} {unit_of(measure)}."
     return ""
+
+
+def angle_target_error(measure: str, target: float) -> str:
+    """An angle's target is a range of motion: from 0 to the most a body can move that joint
+    (its physiological limits, `analysis.clinical.norms.LIMITS`), or "" when it is within."""
+    low, high = limits_for(measure)
+    most = high - low
+    if 0 <= target <= most:
+        return ""
+    return (
+        f"A {measure_label(measure).lower()} target must be between 0 and {most:g}° of range of "
+        f"motion: no body moves that joint further ({low:g}° to {high:g}°)."
+    )
 
 
 def unit_of(measure: str) -> str:

@@ -1,8 +1,11 @@
 """The patient's history as one CSV: the single builder behind every "history CSV" link.
 
 The patient page's link (`patients:history-csv`) and the API (`/api/v1/patients/{id}/history.csv`,
-CONTRACTS.md: date, exercise, score, repetitions, passed, each clinical angle's range) answer the
-same file. One row per recording that has a succeeded run (its newest), oldest first. Columns
+the interface contract: date, exercise, score, repetitions, passed, each clinical angle's range)
+answer the
+same file. One row per recording that has a succeeded run (its newest), oldest first; its figures
+(score, repetitions, passed: the therapist's verdicts first) are the run's reading
+(`webapp.recordings.reading`), as on every page. Columns
 speak to a therapist opening the file in a spreadsheet: plain words, and every number carries its
 unit in the column name, e.g. ``score (/100)``, ``pain (0-10)``, ``left knee flexion range (°)``.
 A recording that does not show its exercise has an empty score and says why in ``note``.
@@ -23,7 +26,8 @@ from analysis.pipeline.results import AnalysisSummary
 from webapp.api.numbers import utc_iso
 from webapp.audit import log
 from webapp.patients.models import Patient
-from webapp.recordings.models import Recording
+from webapp.recordings.models import Recording, RunReading
+from webapp.recordings.reading import readings_of
 
 LEADING_COLUMNS = [
     "date (UTC)",
@@ -40,28 +44,21 @@ COLUMNS = [*LEADING_COLUMNS, *ANGLE_COLUMNS, "note"]
 FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 
 
-def analysed_recordings(patient: Patient) -> list[tuple[Recording, AnalysisSummary]]:
-    """Each recording with a succeeded run and that run's result, oldest first."""
+def analysed_recordings(patient: Patient) -> list[tuple[Recording, AnalysisSummary, RunReading]]:
+    """Each recording with a succeeded run, that run's result and its reading, oldest first."""
     recordings = (
         Recording.objects.filter(patient=patient)
         .select_related("exercise")
         .prefetch_related("runs")
         .order_by("uploaded_at")
     )
-    out = []
-    for recording in recordings:
-        run = recording.latest_succeeded_run()
-        result = run.result if run is not None else None
-        if result is not None:
-            out.append((recording, result))
-    return out
-
-
-def passed_count(result: AnalysisSummary) -> int | str:
-    """Repetitions that passed; empty when the result does not say (no ``passed`` attribute)."""
-    flags = [getattr(rep, "passed", None) for rep in result.repetitions]
-    known = [flag for flag in flags if flag is not None]
-    return sum(bool(flag) for flag in known) if known or not flags else ""
+    newest = [(recording, recording.latest_succeeded_run()) for recording in recordings]
+    readings = readings_of(run.pk for _, run in newest if run is not None)
+    return [
+        (recording, run.result, readings[run.pk])
+        for recording, run in newest
+        if run is not None and run.result is not None and run.pk in readings
+    ]
 
 
 def exercise_name(recording: Recording) -> str:
@@ -80,15 +77,16 @@ def note_of(result: AnalysisSummary) -> str:
     return f"No score: {reason}"
 
 
-def history_row(recording: Recording, result: AnalysisSummary) -> list[Any]:
-    fits = result.match.fits and result.score is not None
+def history_row(recording: Recording, result: AnalysisSummary, reading: RunReading) -> list[Any]:
+    """One recording's row: its figures are its run's reading's (the therapist's verdicts
+    counted), its angles the result's."""
     angles = result.clinical_angles
     return [
         utc_iso(recording.uploaded_at),
         spreadsheet_text(exercise_name(recording)),
-        round(result.score, 2) if fits else "",
-        result.repetition_count,
-        passed_count(result),
+        round(reading.score, 2) if reading.fits and reading.score is not None else "",
+        reading.repetition_count,
+        reading.passed_count,
         "" if recording.pain_score is None else recording.pain_score,
         "" if recording.effort is None else recording.effort,
         *(round(angles[name].range, 2) if name in angles else "" for name in ANGLE_NAMES),
@@ -98,8 +96,8 @@ def history_row(recording: Recording, result: AnalysisSummary) -> list[Any]:
 
 def history_rows(patient: Patient) -> Iterator[list[Any]]:
     yield COLUMNS
-    for recording, result in analysed_recordings(patient):
-        yield history_row(recording, result)
+    for recording, result, reading in analysed_recordings(patient):
+        yield history_row(recording, result, reading)
 
 
 def write_history_csv(patient: Patient, out: TextIO) -> None:

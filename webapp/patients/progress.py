@@ -17,6 +17,7 @@ from datetime import date, datetime, time, timedelta
 from typing import Any
 
 from django.db.models import Case, F, Q, TextField, When
+from django.utils.timezone import localtime
 
 from analysis.clinical.labels import REGIONS, angle_label, region_of
 from analysis.clinical.norms import norm_for
@@ -98,7 +99,7 @@ def point_of(row: tuple) -> dict[str, Any]:
         "recording": str(row[RECORDING]),
         "exercise": str(exercise) if exercise else None,
         "exercise_name": row[NAME] if exercise else None,
-        "date": row[DATE].isoformat(),
+        "date": localtime(row[DATE]).isoformat(),  # the clinic's day, as the pages show it
         "score": figures["score"],
         "repetitions": figures["repetitions"],
         "range_of_motion": figures["range_of_motion"],
@@ -130,7 +131,7 @@ def progress_points_json(
         if exercise not in names:
             names[exercise] = json.dumps(row[NAME] if exercise else None)
         joint_lists.add(row[JOINTS])
-        date = utc_iso(row[DATE]) if api else row[DATE].isoformat()
+        date = utc_iso(row[DATE]) if api else localtime(row[DATE]).isoformat()
         head = (
             f'{{"run": "{row[RUN]}", "recording": "{row[RECORDING]}", "exercise": '
             f'{json.dumps(str(exercise)) if exercise else "null"}, "exercise_name": '
@@ -260,26 +261,42 @@ def normal_band(names: list[str]) -> dict[str, Any] | None:
     return {"low": low, "high": high, "text": f"normal adult range {figures}"}
 
 
+def angle_line_label(name: str) -> str:
+    """A clinical angle with its normal adult range: "Left knee flexion (normal 0° to 135°)"."""
+    try:
+        norm = norm_for(name)
+    except KeyError:  # no published norm
+        return angle_label(name)
+    return f"{angle_label(name)} (normal {norm.minimum:g}° to {norm.maximum:g}°)"
+
+
 def exercise_charts(name: str, points: list[dict[str, Any]]) -> dict[str, Any]:
     """One exercise's progress charts: one point per session placed by date, the score, the
-    repetitions, the pain, and the range of motion and level of the (up to) MAX_LINES body parts
-    the exercise moves most."""
+    repetitions, the pain, the range of the (up to) MAX_LINES clinical angles the exercise moves
+    most (the same ranges as the recording's table of angles, by name with their normal range)
+    and the level of the MAX_LINES body parts the analysis compares most."""
+    angles = {
+        n: [(p["clinical_angles"].get(n) or {}).get("range") for p in points]
+        for p in points
+        for n in p["clinical_angles"]
+    }
     rom = {
         j: [p["range_of_motion"].get(j) for p in points]
         for p in points
         for j in p["range_of_motion"]
     }
-    parts = most_moved(rom)
     return {
         "exercise": name,
         **session_axis([datetime.fromisoformat(p["date"]) for p in points]),
         "score": [p["score"] for p in points],
         "repetitions": [p["repetitions"] for p in points],
         "pain": [p["pain_score"] for p in points],
-        "rom": [{"label": body_part(j).capitalize(), "y": rom[j]} for j in parts],
+        "rom": [
+            {"name": n, "label": angle_line_label(n), "y": angles[n]} for n in most_moved(angles)
+        ],
         "gamma": [
             {"label": body_part(j).capitalize(), "y": [p["gamma"].get(j) for p in points]}
-            for j in parts
+            for j in most_moved(rom)
         ],
     }
 

@@ -18,6 +18,7 @@ from webapp.patients.goal_views import goal_form
 from webapp.patients.goals import patient_goal_statuses
 from webapp.patients.models import Patient
 from webapp.recordings.models import AnalysisRun
+from webapp.recordings.reading import attach_readings
 
 PAGE_SIZE = 25
 RECORDINGS_PER_PAGE = 20
@@ -80,6 +81,7 @@ def recordings_page(patient: Patient, number) -> Page:
         recording.latest = ordered[0] if ordered else None
         succeeded = recording.latest_succeeded_run()
         recording.score = succeeded.score if succeeded else None
+    attach_readings(page.object_list)  # fits and pass count: the run's one reading
     return page
 
 

@@ -1,6 +1,8 @@
 """Therapist corrections of an analysed run: key poses (landmarks), per-joint assessment levels and
-pass/fail verdicts per repetition. They are training data: Celery beat rebuilds the exercise model
-from new landmark/level corrections and refits the 001 pass/fail threshold from the verdicts.
+pass/fail verdicts per repetition. Each rebuilds the run's reading (`webapp.recordings.reading`):
+a therapist's verdict is the verdict on every page, report and export. They are training data:
+Celery beat rebuilds the exercise model from new landmark/level corrections and refits the 001
+pass/fail threshold from the verdicts.
 
 The payload (JSON), every part optional:
 
@@ -23,6 +25,7 @@ from webapp.recordings.models import (
     LandmarkCorrection,
     RepetitionLabel,
 )
+from webapp.recordings.reading import build
 
 MAX_LEVEL = 4
 
@@ -104,6 +107,7 @@ def apply_corrections(run: AnalysisRun, data: Any, user: User) -> dict[str, int]
         RepetitionLabel.objects.update_or_create(
             run=run, index=index, defaults={"passed": passed, "author": user}
         )
+    build(run)  # the run's one reading, with the therapist's verdicts, for every page and export
     return {
         "landmarks": int(landmarks is not None),
         "levels": len(levels),

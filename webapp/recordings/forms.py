@@ -75,6 +75,9 @@ class UploadForm(forms.Form):
             del self.fields["effort"]  # how the session felt is the patient's own answer
         else:
             del self.fields["patient"]
+            # A patient records with what the clinic gave them: no list of file formats.
+            file_help = "The file of your session, as your recording app or camera saved it."
+            self.fields["file"].help_text = file_help
             self.fields["exercise"].help_text = (
                 "One of the exercises your therapist prescribed; leave empty to let the system "
                 "recognise it."

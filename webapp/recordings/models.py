@@ -145,6 +145,8 @@ class AnalysisRunQuerySet(models.QuerySet):
     def update(self, **fields):
         if "summary" in fields and "score" not in fields:
             fields["score"] = summary_score(fields["summary"])
+        if "summary" in fields:  # a new summary: its reading is built again when next read
+            RunReading.objects.filter(run__in=self.values("pk")).delete()
         return super().update(**fields)
 
     def bulk_create(self, objs, *args, **kwargs):
@@ -202,6 +204,8 @@ class AnalysisRun(models.Model):
         fields = kwargs.get("update_fields")
         if fields is not None and "summary" in fields:
             kwargs["update_fields"] = {*fields, "score"}
+        if not self._state.adding and (fields is None or "summary" in fields):
+            drop_reading(self.pk)
         super().save(*args, **kwargs)
 
     @property
@@ -223,7 +227,28 @@ class AnalysisRun(models.Model):
         return cached[1]
 
 
-class Correction(models.Model):
+def drop_reading(run_id) -> None:
+    """Forget a run's reading (its summary or a correction changed): the next reader builds it
+    again (`webapp.recordings.reading`); writers that know better build it at once."""
+    RunReading.objects.filter(run_id=run_id).delete()
+
+
+class ReadingSource(models.Model):
+    """A row a run's reading is built from: writing or deleting one drops that reading."""
+
+    class Meta:
+        abstract = True
+
+    def save(self, *args, **kwargs):
+        super().save(*args, **kwargs)
+        drop_reading(self.run_id)
+
+    def delete(self, *args, **kwargs):
+        drop_reading(self.run_id)
+        return super().delete(*args, **kwargs)
+
+
+class Correction(ReadingSource):
     """What every therapist correction of a run has: training data for the next model, marked
     with the model version that used it."""
 
@@ -254,7 +279,7 @@ class AssessmentCorrection(Correction):
     level = models.PositiveSmallIntegerField()
 
 
-class RepetitionLabel(models.Model):
+class RepetitionLabel(ReadingSource):
     """A therapist's pass/fail verdict on one repetition of a run: data for the 001 threshold."""
 
     run = models.ForeignKey(AnalysisRun, on_delete=models.CASCADE, related_name="repetition_labels")
@@ -267,6 +292,33 @@ class RepetitionLabel(models.Model):
         constraints = [
             models.UniqueConstraint(fields=["run", "index"], name="one_label_per_repetition")
         ]
+
+
+class RunReading(models.Model):
+    """The one reading of a succeeded run: what every page, report, export and the API say of it.
+
+    Built by `webapp.recordings.reading` from the run's result and the therapist's corrections
+    (one verdict rule: the therapist's label first, then the analysis) when the run ends, when a
+    therapist corrects it, and by the first reader that finds none. Lists read its figures.
+    """
+
+    run = models.OneToOneField(
+        AnalysisRun, on_delete=models.CASCADE, primary_key=True, related_name="reading"
+    )
+    rule = models.PositiveSmallIntegerField(default=0)  # the building rule's version
+    fits = models.BooleanField(default=True)  # False: the recording does not show the exercise
+    score = models.FloatField(null=True, blank=True)
+    repetition_count = models.PositiveIntegerField(default=0)
+    passed_count = models.PositiveIntegerField(default=0)
+    labelled_count = models.PositiveIntegerField(default=0)  # verdicts given by a therapist
+    # [{"number", "score", "shown_score", "passed", "by", "verdict", "reasons"}, ...]
+    repetitions = models.JSONField(default=list)
+    # {"message", "to_correct", "went_well", "therapist"}: lists of sentences
+    statements = models.JSONField(default=dict)
+    built_at = models.DateTimeField(auto_now=True)
+
+    def __str__(self) -> str:
+        return f"reading of run {self.run_id}: {self.passed_count}/{self.repetition_count}"
 
 
 class RecordingNote(models.Model):

@@ -36,6 +36,12 @@ RELIABILITY = {
         "marker positions, to about a millimetre",
         "joint centres, estimated from skin markers, and twists of the arms and thighs",
     ),
+    "vicon": SourceReliability(
+        "a marker system (Vicon targets)",
+        "arm raising, elbow bending and the trunk's bending and turning, at a high frame rate",
+        "joint centres, found from how the targets move: a joint the take barely moves is "
+        "placed roughly, so its angle reads roughly",
+    ),
     "mediapipe": SourceReliability(
         "body landmarks from a camera (MediaPipe)",
         "arm and leg angles facing the camera",

@@ -30,7 +30,9 @@ from analysis.bvh import (
     SkeletonMismatchError,
     check_recording,
 )
+from analysis.bvh.plausibility import distinct_durations
 from analysis.kinematics import map_onto
+from analysis.pipeline.prepare import min_frames
 from analysis.sources import SUFFIXES, read_recording
 from analysis.sources.video import SUFFIXES as VIDEO_SUFFIXES
 from analysis.sources.video import VideoHeader, probe
@@ -42,6 +44,7 @@ from webapp.recordings.models import AnalysisRun, Recording
 from webapp.recordings.words import file_problem
 
 MIN_FRAMES = 10
+MIN_VIDEO_SECONDS = 1.0
 VIDEO_JOINTS = 17  # the skeleton a video's landmarks are solved into (`analysis.sources.ik`)
 # BVH and the capture sources `analysis.sources` reads (Kinect .csv, Azure/MediaPipe .json, ...)
 ACCEPTED_SUFFIXES = SUFFIXES
@@ -155,10 +158,14 @@ def parse_video(content: bytes, name: str) -> ParsedUpload:
             header = probe(handle.name)
         except BVHError as error:
             raise ValidationError(str(error)) from error
-    seconds = header.frames / header.fps
-    if header.frames < MIN_FRAMES or seconds < 1.0:
+    needed = max(MIN_FRAMES, min_frames(MIN_VIDEO_SECONDS, 1.0 / header.fps))
+    if header.frames < needed:
+        # Compared in whole frames and printed with enough decimals to differ: never
+        # "lasts 1.0 s; at least 1 s is needed".
+        lasts, least = distinct_durations(header.frames / header.fps, needed / header.fps)
         raise ValidationError(
-            f"The video lasts {seconds:.1f} s; at least 1 s is needed to hold one repetition."
+            f"The video lasts {lasts} ({header.frames} frames); at least {least} "
+            f"({needed} frames) are needed to hold one repetition."
         )
     checksum = hashlib.sha256(content).hexdigest()
     return ParsedUpload(content, checksum, None, name, "video", header)

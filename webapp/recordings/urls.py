@@ -12,6 +12,7 @@ urlpatterns = [
     path("<uuid:pk>/result.json", views.result, name="result"),
     path("<uuid:pk>/confirm/", recognition.confirm, name="confirm"),
     path("<uuid:pk>/corrections/", views.corrections, name="corrections"),
+    path("<uuid:pk>/label/", views.label, name="label"),
     path("<uuid:pk>/move/", recovery_views.move, name="move"),
     path("<uuid:pk>/delete/", recovery_views.delete, name="delete"),
     path("<uuid:pk>/restore/", recovery_views.restore, name="restore"),

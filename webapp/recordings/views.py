@@ -9,19 +9,21 @@ from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import redirect, render
 from django.views.decorators.cache import never_cache
 from django.views.decorators.http import require_POST
+from rest_framework.renderers import JSONRenderer
 
 from webapp.accounts.permissions import (
     get_recording_for_user,
     require_staff,
 )
+from webapp.api.views import RecordingResult
 from webapp.dashboard import patient_result
 from webapp.recordings import recovery_views, services, warmup
 from webapp.recordings.corrections import apply_corrections, corrections_of
 from webapp.recordings.forms import UploadForm, upload_choices
 from webapp.recordings.models import AnalysisRun
 from webapp.recordings.notes import NoteForm, notes_of
+from webapp.recordings.reading import reading_of
 from webapp.recordings.recognition import recognition_status
-from webapp.recordings.results import result_data
 from webapp.recordings.uploads import accept_upload
 
 
@@ -56,7 +58,8 @@ def detail(request: HttpRequest, pk) -> HttpResponse:
     if request.user.is_patient:  # a lay result page, not the therapist's technical one
         return patient_result.page(request, recording)
     runs = list(recording.runs.all())
-    context = {"recording": recording, "run": runs[0] if runs else None, "runs": runs}
+    run = runs[0] if runs else None
+    context = {"recording": recording, "run": run, "runs": runs, "reading": reading_of(run)}
     context["notes"] = notes_of(recording)
     if request.user.is_staff_member:
         context["move_form"] = recovery_views.move_form(request, recording)
@@ -99,12 +102,40 @@ def rerun(request: HttpRequest, pk) -> HttpResponse:
     return redirect("recordings:detail", pk=recording.pk)
 
 
+# One JSON door for a run's result: the page's `result.json` is answered by the API's own
+# view (`/api/v1/recordings/{id}/result/`, in the interface contract), as JSON, behind the
+# page's sign-in.
+api_result = RecordingResult.as_view(renderer_classes=[JSONRenderer])
+
+
 @never_cache
 @login_required
-def result(request: HttpRequest, pk) -> JsonResponse:
-    """Everything the results page shows, as JSON (charts and viewer read it)."""
+def result(request: HttpRequest, pk) -> HttpResponse:
+    """The result of the recording's newest run, exactly as `/api/v1/recordings/{id}/result/`."""
+    return api_result(request, pk=pk)
+
+
+@login_required
+@require_staff
+@require_POST
+def label(request: HttpRequest, pk) -> HttpResponse:
+    """The page's form: a therapist's verdict on one repetition (``index``, ``passed`` 1 or 0),
+    stored as the corrections API stores it, so every page and export counts it at once."""
     recording = get_recording_for_user(request, pk)
-    return JsonResponse(result_data(recording, recording.runs.first(), request.user))
+    run = recording.latest_succeeded_run()
+    index, passed = request.POST.get("index", ""), request.POST.get("passed", "")
+    if run is None or not index.isdigit() or passed not in ("0", "1"):
+        messages.error(request, "That verdict could not be saved: choose a repetition again.")
+        return redirect("recordings:detail", pk=recording.pk)
+    verdict = {"repetitions": [{"index": int(index), "passed": passed == "1"}]}
+    try:
+        apply_corrections(run, verdict, request.user)
+    except ValidationError as error:
+        messages.error(request, " ".join(error.messages))
+    else:
+        word = "passed" if passed == "1" else "not passed"
+        messages.success(request, f"Repetition {int(index) + 1} marked {word}.")
+    return redirect("recordings:detail", pk=recording.pk)
 
 
 @never_cache

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from drf_spectacular.types import OpenApiTypes
-from drf_spectacular.utils import OpenApiResponse, extend_schema
+from drf_spectacular.utils import OpenApiResponse, extend_schema, inline_serializer
+from rest_framework import serializers
 from rest_framework.decorators import api_view
 from rest_framework.request import Request
 from rest_framework.response import Response
@@ -15,7 +16,13 @@ from webapp.reports.views import pdf_response, period
 PENDING = {"status": "pending", "detail": "The report is being generated; try again shortly."}
 REPORT_RESPONSES = {
     (200, "application/pdf"): OpenApiResponse(OpenApiTypes.BINARY, description="The PDF report."),
-    202: OpenApiResponse(OpenApiTypes.OBJECT, description="Being generated; ask again shortly."),
+    202: OpenApiResponse(
+        inline_serializer(
+            "ReportPending",
+            {"status": serializers.ChoiceField(["pending"]), "detail": serializers.CharField()},
+        ),
+        description="Being generated; ask again shortly.",
+    ),
 }
 
 

@@ -7,16 +7,24 @@ from typing import Any
 
 from django.utils import timezone
 
+from analysis.clinical.labels import angle_label
 from webapp.patients.goals import patient_goal_statuses
-from webapp.patients.progress import MAX_LINES, most_moved, patient_progress, session_x
+from webapp.patients.progress import (
+    MAX_LINES,
+    angle_line_label,
+    most_moved,
+    patient_progress,
+    session_x,
+)
 from webapp.recordings.notes import note_lines
+from webapp.recordings.reading import reading_of
 from webapp.recordings.words import body_part, key_pose_name
 from webapp.reports import playback
 from webapp.reports.clinical import clinical_content
 from webapp.reports.timeline import timeline
 
 MAX_POSES = 4
-MAX_ROM_LINES = MAX_LINES  # body parts per exercise chart: the ones the exercise moves most
+MAX_ROM_LINES = MAX_LINES  # angles per exercise chart: the ones the exercise moves most
 
 
 def fmt(value: Any, digits: int = 0) -> str:
@@ -45,12 +53,13 @@ def guidance_text(rep: dict[str, Any]) -> str:
     )
 
 
-def repetition_content(run, recording) -> dict[str, Any]:
-    """The repetition table (times in seconds, pass/fail, guidance) and the timeline's layers."""
+def repetition_content(run, recording, reading) -> dict[str, Any]:
+    """The repetition table (times in seconds, the reading's verdicts, guidance) and the
+    timeline's layers."""
     names = recording.exercise.landmark_type_names if recording.exercise else {}
     line = timeline(
         run.result, {str(k): str(v) for k, v in (names or {}).items()}, run.summary,
-        fallback_frames=recording.n_frames or 0,
+        fallback_frames=recording.n_frames or 0, reading=reading,
     )  # fmt: skip
     rows = [
         [r["number"], f"{r['first_s']:.1f}–{r['last_s']:.1f}", r["score"], r["verdict"],
@@ -58,6 +67,13 @@ def repetition_content(run, recording) -> dict[str, Any]:
         for r in line["repetitions"]
     ]  # fmt: skip
     return {"repetitions": rows, "timeline": line}
+
+
+def passed_line(reading) -> str:
+    """The pass count as every page says it ("4 of 10 repetitions passed")."""
+    if not reading.fits:
+        return "No repetition was counted: the recording does not show the exercise."
+    return f"{reading.passed_count} of {reading.repetition_count} repetitions passed"
 
 
 def recording_content(recording) -> dict[str, Any]:
@@ -76,12 +92,15 @@ def recording_content(recording) -> dict[str, Any]:
     }
     if not content["analysed"]:
         return content
-    result = run.result
-    content["score"] = fmt(result.score)
-    content.update(repetition_content(run, recording))
-    content["feedback"] = [comment.text for comment in result.feedback]
-    if not result.match.fits:  # no score and no repetition: say why instead
-        content["feedback"] = [result.match.message, *(c.text for c in result.advice.corrections)]
+    result, reading = run.result, reading_of(run)
+    content["score"] = fmt(reading.score)
+    content["passed_line"] = passed_line(reading)
+    content.update(repetition_content(run, recording, reading))
+    said = reading.statements
+    # no score and no repetition: say why first; then what to correct (the reading's statements)
+    content["feedback"] = [*([said["message"]] if said.get("message") else []), *said["to_correct"]]
+    content["went_well"] = said.get("went_well", [])
+    content["therapist"] = said.get("therapist", [])
     content.update(clinical_content(result, recording.exercise))
     content["rom"] = [
         [body_part(joint).capitalize(), fmt(value, 1), fmt(result.gamma.get(joint), 2)]
@@ -122,25 +141,44 @@ def series_by_exercise(points: list[dict], field: str) -> dict[str, list[tuple[f
     return {name: series[name] for name in series if name in kept}
 
 
-def rom_series(points: list[dict]) -> dict[str, dict[str, list[tuple[float, float]]]]:
-    """Per exercise, the range of motion of the (up to) MAX_ROM_LINES body parts it moves most
-    over the sessions: a line only ever joins sessions of one exercise (x: days since the
-    report's first day)."""
+def _rom_by_angle(points: list[dict]) -> dict[str, dict[str, list[tuple[float, float]]]]:
+    """Per exercise, by angle name, (day, range) of the MAX_ROM_LINES clinical angles it moves
+    most (x: days since the report's first day)."""
     _, days = session_days(points)
     charts: dict[str, dict[str, list[tuple[float, float]]]] = {}
     for day, point in zip(days, points, strict=True):
         series = charts.setdefault(point.get("exercise_name") or "Unknown exercise", {})
-        for joint, value in (point.get("range_of_motion") or {}).items():
-            series.setdefault(joint, []).append((day, float(value)))
+        for angle, span in (point.get("clinical_angles") or {}).items():
+            series.setdefault(angle, []).append((day, float(span["range"])))
     return {
         exercise: {
-            body_part(joint): series[joint]
-            for joint in most_moved(
-                {j: [v for _, v in line] for j, line in series.items()}, MAX_ROM_LINES
+            angle: series[angle]
+            for angle in most_moved(
+                {a: [v for _, v in line] for a, line in series.items()}, MAX_ROM_LINES
             )
         }
         for exercise, series in charts.items()
     }
+
+
+def rom_series(points: list[dict]) -> dict[str, dict[str, list[tuple[float, float]]]]:
+    """Per exercise, the range of the (up to) MAX_ROM_LINES clinical angles it moves most over
+    the sessions, by the angle's name in words (the ranges of the recording's table of angles):
+    a line only ever joins sessions of one exercise."""
+    return {
+        exercise: {angle_label(angle): line for angle, line in series.items()}
+        for exercise, series in _rom_by_angle(points).items()
+    }
+
+
+def rom_norms(points: list[dict]) -> dict[str, str]:
+    """Per exercise, the normal adult ranges of the angles its chart shows, in words."""
+    out = {}
+    for exercise, series in _rom_by_angle(points).items():
+        named = [angle_line_label(angle) for angle in series]
+        if named:
+            out[exercise] = "Each line's normal adult range: " + "; ".join(named) + "."
+    return out
 
 
 def progress_content(patient, since: date | None, until: date | None) -> dict[str, Any]:
@@ -167,6 +205,7 @@ def progress_content(patient, since: date | None, until: date | None) -> dict[st
         "first_day": session_days(points)[0],
         "score_series": series_by_exercise(points, "score"),
         "rom_series": rom_series(points),
+        "rom_norms": rom_norms(points),
         "goals": goal_rows(patient),
     }
 

@@ -191,6 +191,8 @@ def recording_pdf(content: dict[str, Any]) -> bytes:
         story.append(paragraph("This recording has no analysis result yet."))
         return build(story + notes_flowables(content), content["title"])
     story.append(paragraph(f"Score {content['score']} / 100", "Heading2"))
+    if content.get("passed_line"):  # the run's reading: the same count as every page
+        story.append(paragraph(content["passed_line"]))
     reps = content["repetitions"]
     story.append(
         table([["#", "Time (s)", "Score (0–100)", "Result", "Guidance"],
@@ -215,8 +217,10 @@ def recording_pdf(content: dict[str, Any]) -> bytes:
         story.append(paragraph("Key poses", "Heading2"))
         story.append(pose_drawing(content["poses"], content["parents"]))
     if content.get("rom"):
-        story.append(paragraph("Range of motion (degrees)", "Heading2"))
-        story.append(table([["Body part", "Range (degrees)", "Level (0–1)"], *content["rom"]]))
+        # body segments' own turning, not the clinical angles (those are the table of angles)
+        story.append(paragraph("Body segments: how far each turned, and its level", "Heading2"))
+        head = ["Body segment", "Turned (degrees)", "Level (0–1)"]
+        story.append(table([head, *content["rom"]]))
         story.append(paragraph(LEVEL_HELP))
     story += clinical_flowables(content)
     story += notes_flowables(content)
@@ -258,8 +262,9 @@ def progress_pdf(content: dict[str, Any]) -> bytes:
     )
     for exercise, series in content["rom_series"].items():
         if series:
-            title = f"{exercise}: range of motion by session"
+            title = f"{exercise}: range of the joint angles moved most, by session"
             story.append(line_chart(series, title, "range of motion (°)", first))
+            story.append(paragraph(content.get("rom_norms", {}).get(exercise, "")))
     head = ["Date", "Exercise", "Score (0–100)", "Repetitions", "Pain (0–10)"]
     story += table_section("Sessions", table([head, *rows]))
     story += goals_flowables(content)

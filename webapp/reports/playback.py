@@ -11,8 +11,11 @@ from typing import Any
 
 import numpy as np
 
+from analysis.clinical.labels import angle_label, involved_regions, region_of
+from analysis.clinical.norms import norm_for
 from analysis.kinematics.forward_kinematics import segment_angles
 from analysis.pipeline import AnalysisSummary
+from analysis.pipeline.curves import curve_name
 from analysis.pipeline.results import assessment_to_json
 from webapp.recordings.models import AnalysisRun
 from webapp.recordings.words import SKELETON_LABELS, body_part, key_pose_name
@@ -76,9 +79,51 @@ def chart_joints(names: list[str], parents: np.ndarray, result: AnalysisSummary)
     return chosen[:8]
 
 
-def angle_series(
+def chart_frames(n_frames: int, curves: list[np.ndarray]) -> np.ndarray:
+    """At most about MAX_CHART_POINTS frames, evenly spread, plus each curve's smallest and
+    largest value's frame: the chart reaches the same extremes as the table of ranges."""
+    step = max(1, int(np.ceil(n_frames / MAX_CHART_POINTS)))
+    kept = set(range(0, n_frames, step))
+    for values in curves:
+        if np.isfinite(values).any():
+            kept |= {int(np.nanargmin(values)), int(np.nanargmax(values))}
+    return np.array(sorted(kept), dtype=int)
+
+
+def _degrees(values: np.ndarray) -> list[float | None]:
+    return [round(float(v), 2) if np.isfinite(v) else None for v in values]
+
+
+def clinical_series(arrays: dict[str, np.ndarray], involved: list[str]) -> dict[str, Any]:
+    """The clinical angles frame by frame (`analysis.pipeline.curves`: the series the table's
+    ranges come from), named in words with their normal adult range; those of the regions the
+    exercise moves are shown at first. Runs analysed before the curves were kept have none."""
+    curves = {name: arrays[key] for key in arrays if (name := curve_name(key))}
+    frames = chart_frames(arrays["patient_positions"].shape[0], list(curves.values()))
+    regions = involved_regions(involved)
+    series = []
+    for name, values in curves.items():
+        try:
+            norm: tuple[float, float] | None = (norm_for(name).minimum, norm_for(name).maximum)
+        except KeyError:
+            norm = None
+        series.append(
+            {
+                "angle": name,
+                "label": angle_label(name),
+                "normal": norm,
+                "involved": region_of(name) in regions,
+                "values": _degrees(values[frames].astype(np.float64)),
+            }
+        )
+    return {"frames": frames.tolist(), "series": series}
+
+
+def segment_series(
     arrays: dict[str, np.ndarray], names: list[str], result: AnalysisSummary
 ) -> dict[str, Any]:
+    """The angle between each charted body segment and the next (180° is straight), for the
+    therapists who ask for it; not a clinical angle, and never shown as one."""
     parents = arrays["parents"].astype(int)
     n_frames = arrays["patient_positions"].shape[0]
     step = max(1, int(np.ceil(n_frames / MAX_CHART_POINTS)))
@@ -102,6 +147,12 @@ def angle_series(
                     }
                 )
     return {"frames": frames.tolist(), "series": series}
+
+
+def involved_joints(run: AnalysisRun, result: AnalysisSummary) -> list[str]:
+    """The exercise's involved joints; else the joints the analysis compared."""
+    exercise = run.recording.exercise
+    return list(getattr(exercise, "involved_joints", None) or result.range_of_motion)
 
 
 def type_names(run: AnalysisRun) -> dict[str, str]:
@@ -136,5 +187,6 @@ def description(run: AnalysisRun, arrays: dict[str, np.ndarray]) -> dict[str, An
         "feedback": [comment.to_dict() for comment in result.feedback],
         "assessment": [assessment_to_json(item) for item in result.assessment],
         "score": result.score if run.result else None,
-        "angles": angle_series(arrays, names, result),
+        "angles": clinical_series(arrays, involved_joints(run, result)),
+        "segments": segment_series(arrays, names, result),
     }

@@ -13,12 +13,15 @@ from django.db import transaction
 from django.utils import timezone
 
 from webapp.patients.progress import patient_progress
+from webapp.recordings.reading import reading_of
 from workers.tasks import make_report
 
 
 def recording_report_name(recording) -> str:
     run = recording.latest_succeeded_run()
     notes = ",".join(str(pk) for pk in recording.notes.values_list("pk", flat=True))
+    reading = reading_of(run)  # a therapist's correction rebuilds it: a new report
+    notes += f"|{reading.built_at.isoformat()}" if reading else ""
     # A new clinical note makes a new report, as a new run does.
     suffix = f"-{hashlib.sha256(notes.encode()).hexdigest()[:12]}" if notes else ""
     return f"reports/recording-{recording.pk}-{run.pk if run else 'none'}{suffix}.pdf"

@@ -2,8 +2,8 @@
 
 Three key-pose layers (found by the classifier, moved or chosen by refining, removed or added by
 periodic landmark sequence analysis, each labelled in a therapist's words), the repetitions with
-pass/fail against the threshold of the run, and the guidance of each repetition with the stretch
-it applies to.
+the verdicts of the run's reading (`webapp.recordings.reading`), and the guidance of each
+repetition with the stretch it applies to.
 """
 
 from __future__ import annotations
@@ -13,18 +13,12 @@ from collections.abc import Mapping
 from typing import Any
 
 from analysis.pipeline import AnalysisSummary
-from analysis.pipeline.results import RepetitionResult
+from webapp.recordings.models import RunReading
+from webapp.recordings.reading import guidance_words, repetition_rows
 from webapp.recordings.words import key_pose_name
 
-# Paper 001's guidance types as the therapist reads them.
-GUIDANCE_WORDS = {
-    "too fast": "too fast",
-    "too slow": "too slow",
-    "overdone": "went too far",
-    "incomplete": "did not reach far enough",
-}
 LAYERS = (
-    ("identified", "key poses the analysis found"),
+    ("identified", "key poses recognised directly"),
     ("refined", "key poses adjusted to the nearest clear position"),
     ("periodic", "key poses removed or added so they come in the exercise's order"),
 )
@@ -34,18 +28,8 @@ FALLBACK_NOTE = (
 )
 
 
-def guidance_words(kind: str) -> str:
-    return GUIDANCE_WORDS.get(kind, kind.replace("_", " "))
-
-
 def seconds(frame: int, fps: float) -> float:
     return round(frame / fps, 2) if fps > 0 else float(frame)
-
-
-def verdict(rep: RepetitionResult, threshold: float, stored_passed: bool | None) -> str:
-    """'passed (score 74, needs 50)'; runs that stored no verdict are judged by the score."""
-    passed = rep.score >= threshold if stored_passed is None else stored_passed
-    return f"{'passed' if passed else 'not passed'} (score {rep.score:.0f}, needs {threshold:.0f})"
 
 
 class _Scale:
@@ -94,25 +78,26 @@ def ticks(scale: _Scale) -> list[dict[str, Any]]:
     ]
 
 
-def repetitions(result: AnalysisSummary, scale: _Scale) -> list[dict[str, Any]]:
-    rows = []
-    for i, rep in enumerate(result.repetitions):
-        text = verdict(rep, result.pass_threshold, rep.passed)
+def repetitions(
+    result: AnalysisSummary, scale: _Scale, reading: RunReading | None
+) -> list[dict[str, Any]]:
+    """Each repetition's stretch with the reading's verdict (a result without a run: the same
+    rule without therapist labels)."""
+    rows = reading.repetitions if reading is not None else repetition_rows(result, [], {})
+    out = []
+    for rep, row in zip(result.repetitions, rows, strict=True):
         guidance = [
-            scale.span(*g.frames, label=guidance_words(g.type), number=i + 1) for g in rep.guidance
+            scale.span(*g.frames, label=guidance_words(g.type), number=row["number"])
+            for g in rep.guidance
         ]
-        rows.append(
+        out.append(
             scale.span(
-                rep.start,
-                rep.end,
-                number=i + 1,
-                score=round(rep.score),
-                passed=text.startswith("passed"),
-                verdict=text,
+                rep.start, rep.end, number=row["number"], score=row["shown_score"],
+                passed=row["passed"], verdict=row["verdict"], reasons=row["reasons"],
                 guidance=guidance,
             )
-        )
-    return rows
+        )  # fmt: skip
+    return out
 
 
 def timeline(
@@ -120,9 +105,11 @@ def timeline(
     type_names: Mapping[str, str],
     stored: Mapping[str, Any] | None = None,
     fallback_frames: int = 0,
+    reading: RunReading | None = None,
 ) -> dict[str, Any]:
-    """Everything the timeline shows. ``stored`` (the run's raw summary) is no longer read: the
-    typed result tells a run that stored no verdict or segmentation apart (None)."""
+    """Everything the timeline shows; verdicts are the run's ``reading``'s. ``stored`` (the
+    run's raw summary) is no longer read: the typed result tells a run that stored no
+    segmentation apart (None)."""
     scale = _Scale(result.frames or fallback_frames, result.fps)
 
     def pose(mark: Any) -> dict[str, Any]:
@@ -153,7 +140,7 @@ def timeline(
         "candidates": result.periodic.candidates,
         "ticks": ticks(scale),
         "threshold": round(result.pass_threshold),
-        "repetitions": repetitions(result, scale),
+        "repetitions": repetitions(result, scale, reading),
         # Older runs stored no segmentation (None): only an explicit "fallback" earns the note;
         # a recording that does not show the exercise has no repetition to explain.
         "fallback": result.segmentation == "fallback" and result.match.fits,

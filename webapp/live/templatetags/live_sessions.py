@@ -18,3 +18,14 @@ register = template.Library()
 @register.simple_tag
 def live_exercises(prescriptions: Iterable[Prescription]) -> list[Exercise]:
     return services.startable_of(prescriptions)
+
+
+@register.simple_tag
+def live_camera_prescriptions(prescriptions: Iterable[Prescription]) -> list[Prescription]:
+    """The prescriptions whose exercise the camera page can follow (one per exercise)."""
+    startable = {exercise.pk for exercise in services.startable_of(prescriptions)}
+    chosen: dict[object, Prescription] = {}
+    for prescription in prescriptions:
+        if prescription.exercise_id in startable:
+            chosen.setdefault(prescription.exercise_id, prescription)
+    return sorted(chosen.values(), key=lambda p: p.exercise.name)

@@ -6,6 +6,7 @@ from typing import Any
 
 from django import template
 
+from webapp.recordings.reading import reading_of
 from webapp.reports import timeline as build
 
 register = template.Library()
@@ -22,7 +23,7 @@ def recording_timeline(run, recording) -> dict[str, Any] | None:
     names = recording.exercise.landmark_type_names if recording.exercise else {}
     return build.timeline(
         run.result, {str(k): str(v) for k, v in (names or {}).items()}, run.summary,
-        fallback_frames=recording.n_frames or 0,
+        fallback_frames=recording.n_frames or 0, reading=reading_of(run),
     )  # fmt: skip
 
 

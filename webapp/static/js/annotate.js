@@ -171,7 +171,7 @@ function keyPosePage(box) {
     form.append("involved_joints", JSON.stringify(chosen));
     const answer = await fetch(box.dataset.saveUrl, { method: "POST", body: form, headers: { "X-CSRFToken": csrf } });
     const body = await answer.json();
-    document.getElementById("landmarks-status").textContent = answer.ok ? "Saved."
+    document.getElementById("landmarks-status").textContent = answer.ok ? (body.message || "Saved.")
       : Object.values(body.errors || {}).flat().map((e) => e.message).join(" ");
   }
 

@@ -51,9 +51,6 @@ function repetition(event) {
 }
 
 function position(event) {
-  $("frame").textContent = event.frame;
-  $("tutor-frame").textContent = event.tutor_frame;
-  $("latency").textContent = event.latency_ms.toFixed(1);
   $("live-state").textContent = "Live";
   if (event.patient) pose(event);
 }
@@ -61,8 +58,8 @@ function position(event) {
 function summary(event) {
   $("live-state").textContent = "Ended";
   $("rep-count").textContent = event.repetitions;
-  $("summary").textContent = `Live: ${event.repetitions} repetitions, ${event.frames} frames, ` +
-    `latency p95 ${event.latency_ms_p95} ms` + (event.dropped ? `, ${event.dropped} frames dropped` : "");
+  $("summary").textContent = `Live: ${event.repetitions} repetitions` +
+    (event.dropped ? `; ${event.dropped} movements arrived too fast and were left out` : "");
   pollOffline();
 }
 
@@ -71,15 +68,23 @@ async function pollOffline() {
   const offline = body.offline;
   if (!offline) return;
   if (offline.status !== "succeeded") {
-    $("offline").textContent = `Offline analysis: ${offline.status} (${offline.progress} %)`;
+    $("offline").textContent = `Analysis of the recording: ${offline.status} (${offline.progress} %)`;
     if (offline.status !== "failed") setTimeout(pollOffline, 2000);
     return;
   }
-  $("offline").innerHTML = `Offline analysis: ${offline.repetitions.length} repetitions, score ` +
-    `${offline.score} (<a href="${root.dataset.recordingBase}${body.recording}/">recording</a>)`;
+  $("offline").innerHTML = `Analysis of the recording: ${offline.repetitions.length} repetitions, score ` +
+    `${offline.score ?? "–"} (<a href="${root.dataset.recordingBase}${body.recording}/">recording</a>)`;
+  // A session that ended before this page opened has no live rows: the analysis lists them.
+  const listed = rows.size > 0;
   offline.repetitions.forEach((rep, i) => {
-    const tr = rows.get(i);
-    if (tr) tr.querySelector(".offline").textContent = rep.score.toFixed(1);
+    let tr = rows.get(i);
+    if (!tr && !listed) {
+      tr = document.createElement("tr");
+      tr.innerHTML = `<td>${i + 1}</td><td>${rep.start}–${rep.end}</td><td>–</td><td>–</td><td class="offline"></td>`;
+      $("reps").append(tr);
+      rows.set(i, tr);
+    }
+    if (tr) tr.querySelector(".offline").textContent = rep.score == null ? "–" : rep.score.toFixed(1);
   });
 }
 

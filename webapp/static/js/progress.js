@@ -37,17 +37,34 @@
     return { ...ex, axis: { ...ex.axis, range, dtick }, ...extra };
   };
 
+  // Days as whole numbers counted in the clinic's calendar: the page gives today's date and each
+  // session's date in the clinic's time zone, and the arithmetic below reads them as UTC dates,
+  // so neither the browser's own time zone nor the time of day ever moves a session to another day.
+  const DAY_MS = 86400000;
+  const dayOf = (iso) => Date.UTC(+iso.slice(0, 4), +iso.slice(5, 7) - 1, +iso.slice(8, 10)) / DAY_MS;
+  const dateOf = (day) => new Date(day * DAY_MS);
+  const MONTHS = ["Jan", "Feb", "Mar", "Apr", "May", "Jun", "Jul", "Aug", "Sep", "Oct", "Nov", "Dec"];
+  const WEEKDAYS = ["Mon", "Tue", "Wed", "Thu", "Fri", "Sat", "Sun"];
+  const weekday = (day) => (dateOf(day).getUTCDay() + 6) % 7;  // Monday 0
+  const words = (day) => `${dateOf(day).getUTCDate()} ${MONTHS[dateOf(day).getUTCMonth()]}`;
+  const today = dayOf(box.dataset.today || new Date().toISOString());
+  const todayIso = dateOf(today).toISOString().slice(0, 10);
+
   function adherence(ex) {
-    // Weeks (columns) x weekdays (rows), counting sessions per day over the last 12 weeks.
-    const today = new Date();
-    const monday = new Date(today); monday.setDate(today.getDate() - ((today.getDay() + 6) % 7) - 7 * 11);
+    // Weeks (columns, labelled by their Monday) x weekdays (rows), sessions per day over the last
+    // 12 weeks; each cell says its date when pointed at.
+    const monday = today - weekday(today) - 7 * 11;
     const z = Array.from({ length: 7 }, () => Array(12).fill(0));
     ex.x.forEach((x) => {
-      const day = Math.floor((new Date(x.slice(0, 10)) - monday) / 86400000);
+      const day = dayOf(x) - monday;
       if (day >= 0 && day < 84) z[day % 7][Math.floor(day / 7)] += 1;
     });
-    const weeks = Array.from({ length: 12 }, (_, w) => { const d = new Date(monday); d.setDate(d.getDate() + 7 * w); return d.toISOString().slice(0, 10); });
-    return [{ type: "heatmap", z, x: weeks, y: ["Mon", "Tue", "Wed", "Thu", "Fri", "Sat", "Sun"], colorscale: [[0, "#f3f5f8"], [1, "#2da44e"]], zmin: 0, showscale: false, xgap: 2, ygap: 2 }];
+    const weeks = Array.from({ length: 12 }, (_, w) => words(monday + 7 * w));
+    const dates = WEEKDAYS.map((name, d) => weeks.map((_, w) => `${name} ${words(monday + 7 * w + d)} ${dateOf(monday + 7 * w + d).getUTCFullYear()}`));
+    return [{
+      type: "heatmap", z, x: weeks, y: WEEKDAYS, customdata: dates, hovertemplate: "%{customdata}: %{z} session(s)<extra></extra>",
+      colorscale: [[0, "#f3f5f8"], [1, "#2da44e"]], zmin: 0, showscale: false, xgap: 2, ygap: 2,
+    }];
   }
 
   function draw() {
@@ -58,11 +75,11 @@
     Plotly.react("chart-gamma", ex.gamma.map((p) => line(ex, p.y, p.label, " of 1")), layout(ex, "level (0–1)", { yaxis: { range: [0, 1.05] } }), config);
     const reps = [{ type: "bar", x: ex.x, y: ex.repetitions, name: "repetitions", marker: { color: "#1f6feb" }, customdata: ex.when, hovertemplate: "%{y} repetitions<extra>%{customdata}</extra>" }];
     const targets = prescriptions.filter((p) => p.target_repetitions != null && p.exercise === ex.exercise).map((p) => ({
-      x: [p.start, p.end || new Date().toISOString().slice(0, 10)], y: [p.target_repetitions, p.target_repetitions],
+      x: [p.start, p.end || todayIso], y: [p.target_repetitions, p.target_repetitions],
       name: "prescribed target", mode: "lines", line: { dash: "dash" },
     }));
     Plotly.react("chart-reps", [...reps, ...targets], layout(ex, "repetitions (count)", { bargap: 0.6 }), config);
-    Plotly.react("chart-adherence", adherence(ex), { margin: { t: 10, r: 10, b: 50, l: 60 }, xaxis: { title: { text: "week starting" } }, yaxis: { title: { text: "day of the week" } } }, config);
+    Plotly.react("chart-adherence", adherence(ex), { margin: { t: 10, r: 10, b: 50, l: 60 }, xaxis: { type: "category", title: { text: "week starting (Monday)" } }, yaxis: { type: "category", autorange: "reversed", title: { text: "day of the week" } } }, config);
   }
   select.addEventListener("change", draw);
   draw();

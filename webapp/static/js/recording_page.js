@@ -110,25 +110,62 @@ function captions(playback) {
   };
 }
 
+// The clinical angles of the table beside the chart, frame by frame (webapp.reports.playback):
+// each named with its normal adult range; those of the body parts the exercise moves shown.
+function angleTraces(meta, seconds) {
+  const x = meta.angles.frames.map(seconds);
+  const anyInvolved = meta.angles.series.some((s) => s.involved);
+  return meta.angles.series.map((s, i) => ({
+    x, y: s.values, mode: "lines", connectgaps: false,
+    name: s.normal ? `${s.label} (normal ${s.normal[0]}° to ${s.normal[1]}°)` : s.label,
+    visible: (anyInvolved ? s.involved : i < 3) ? true : "legendonly",
+  }));
+}
+
+// Angles between body segments (180° is straight): never clinical angles, so under their own name.
+function segmentTraces(meta, seconds) {
+  const x = meta.segments.frames.map(seconds);
+  const joints = [...new Set(meta.segments.series.map((s) => s.joint))];
+  return meta.segments.series.map((s) => ({
+    x, y: s.values, name: `${s.label} · ${s.skeleton_label ?? s.skeleton}`, mode: "lines",
+    line: { dash: s.skeleton === "patient" ? "solid" : "dot" },
+    visible: joints.indexOf(s.joint) < 3 ? true : "legendonly",
+  }));
+}
+
+// For a therapist who asks for them, in a chart of their own.
+function segmentChart(meta, seconds, layout) {
+  const box = $("show-segments");
+  if (!box) return;
+  box.addEventListener("change", () => {
+    $("segments").hidden = !box.checked;
+    if (box.checked) Plotly.newPlot($("chart-segments"), segmentTraces(meta, seconds), layout, window.chartConfig());
+  });
+}
+
+// A run analysed before the clinical curves were kept has only the segments' angles: the chart
+// shows them under their own name, never as joint angles.
+function segmentsInstead() {
+  $("angles-title").textContent = "Angles between body segments (degrees, over time in seconds)";
+  $("angles-help").textContent = "Not the clinical angles of the table below (this recording was analysed before their curves were kept): the angle between each body segment and the next, 180° being a straight line.";
+  if ($("segments-choice")) $("segments-choice").hidden = true;
+}
+
 function charts(playback) {
   if (!window.Plotly) return () => {};
   const { meta } = playback;
   const seconds = (f) => f / meta.fps;
-  const x = meta.angles.frames.map(seconds);
-  // Three joints shown at first (the rest one click away in the legend) keep the chart readable.
-  const joints = [...new Set(meta.angles.series.map((s) => s.joint))];
-  const traces = meta.angles.series.map((s) => ({
-    x, y: s.values, name: `${s.label ?? s.joint} · ${s.skeleton_label ?? s.skeleton}`, mode: "lines",
-    line: { dash: s.skeleton === "patient" ? "solid" : "dot" },
-    visible: joints.indexOf(s.joint) < 3 ? true : "legendonly",
-  }));
+  const clinical = angleTraces(meta, seconds);
+  const traces = clinical.length ? clinical : segmentTraces(meta, seconds);
   const marks = meta.landmarks.map((m) => ({ type: "line", xref: "x", yref: "paper", x0: seconds(m.frame), x1: seconds(m.frame), y0: 0, y1: 1, line: { color: "#bbb", width: 1, dash: "dot" } }));
   const layout = { margin: { t: 10, r: 10, b: 40, l: 45 }, xaxis: { title: { text: "time (s)" } }, yaxis: { title: { text: "angle (°)" } }, shapes: marks, legend: { orientation: "h" } };
   const chart = $("chart-angles");
-  Plotly.newPlot(chart, traces, layout, window.chartConfig());
-  chart.on("plotly_click", (e) => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(e.points[0].x * meta.fps); });
+  segmentChart(meta, seconds, layout);
   const reps = meta.repetitions;
   Plotly.newPlot($("chart-reps"), [{ type: "bar", x: reps.map((_, i) => `#${i + 1}`), y: reps.map((r) => r.score), text: reps.map((r) => (r.guidance || []).map((g) => guidanceWords(g.type)).join(", ")), marker: { color: "#1f6feb" } }], { margin: { t: 10, r: 10, b: 40, l: 50 }, xaxis: { title: { text: "repetition (number)" }, type: "category" }, yaxis: { range: [0, 100], title: { text: "score (0–100)" } } }, window.chartConfig());
+  if (!clinical.length) segmentsInstead();
+  Plotly.newPlot(chart, traces, layout, window.chartConfig());
+  chart.on("plotly_click", (e) => { playback.playing = false; $("play").textContent = "Play"; playback.setFrame(e.points[0].x * meta.fps); });
   // The time cursor is a positioned overlay, not a Plotly shape: relayout is too slow to run
   // at the animation rate.
   const cursor = document.createElement("div");

@@ -23,13 +23,15 @@ from django.core.management.base import BaseCommand, CommandError
 from django.db import connection, models, transaction
 from django.utils import timezone
 
+from analysis.pipeline.results import AnalysisSummary
 from webapp.accounts.models import Clinic, Role, User
 from webapp.dashboard.models import ProgressPoint
 from webapp.demo import large_clinic as gen
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from webapp.patients.models import Patient, PerformanceLevel, Prescription
 from webapp.patients.progress_store import rendered, summary_values
-from webapp.recordings.models import AnalysisRun, Recording
+from webapp.recordings.models import AnalysisRun, Recording, RunReading
+from webapp.recordings.reading import figures
 
 EXERCISE_NAMES = ("Deep squat", "Sit to stand", "Shoulder abduction")
 THERAPIST_PASSWORD = "large-clinic-therapist-pw"
@@ -201,6 +203,7 @@ class Filler:
         self.timed(AnalysisRun, self.run_rows)
         self.timed(PerformanceLevel, self.level_rows)
         self.timed(ProgressPoint, self.point_rows)
+        self.timed(RunReading, self.reading_rows)
         return self.timings
 
     def timed(self, model, rows) -> None:
@@ -229,6 +232,24 @@ class Filler:
                     if status == "succeeded":
                         point = rendered({**tail, "pk": run_id, "score": float(upload.score)})
                         yield {f.attname: getattr(point, f.attname) for f in POINT_COLUMNS}
+
+    def reading_rows(self) -> Iterator[dict]:
+        """The reading a worker stores when a run succeeds (`webapp.recordings.reading`), built
+        once per generated summary; each run's own score beside it."""
+        readings = []
+        for tail in self.tails:
+            data = json.loads('{"score": 0, ' + tail)
+            found = figures(AnalysisSummary.from_json(data), data)
+            for key in ("repetitions", "statements"):
+                found[key] = JsonText(json.dumps(found[key]))
+            readings.append(found)
+        for index in range(len(self.patient_ids)):
+            for upload in self.uploads(index):
+                found = readings[upload.recording.int % len(self.tails)]
+                for run_id, status in upload.runs:
+                    if status == "succeeded":
+                        score = float(upload.score) if found["fits"] else None
+                        yield {**found, "run_id": run_id, "score": score}
 
     def make_exercises(self) -> list[tuple[Exercise, ExerciseModel]]:
         made = []

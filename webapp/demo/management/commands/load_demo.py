@@ -1,7 +1,7 @@
 from django.conf import settings
 from django.core.management.base import BaseCommand, CommandError
 
-from webapp.demo.clinic import load_demo_clinic
+from webapp.demo.clinic import DEMO_ACCOUNTS, load_demo_clinic
 
 
 class Command(BaseCommand):
@@ -23,3 +23,7 @@ class Command(BaseCommand):
             )
         clinic = load_demo_clinic()
         self.stdout.write(self.style.SUCCESS(f"Demo clinic ready: {clinic.name}"))
+        # The accounts are said here, on the machine set up for trying the site, never on its
+        # pages (a production clinic's pages would show them too).
+        for username, password in DEMO_ACCOUNTS:
+            self.stdout.write(f"  sign in as {username} (password {password})")
