@@ -201,10 +201,10 @@ STEADY_FOOT_DEG = 20.0  # the standing foot's 10–90 % spread: beyond it, no ze
 def standing_frames(geo: Geometry, side: str) -> FloatArray:
     """Per frame, whether the person stands on this leg (boolean (F,); all False without the
     thigh, shank and foot)."""
-    parts = [geo.axes.get(f"{p}_{side}") for p in ("thigh", "shank", "foot")]
-    if any(p is None for p in parts):
+    names = [f"{p}_{side}" for p in ("thigh", "shank", "foot")]
+    if any(name not in geo.axes for name in names):
         return np.zeros(len(next(iter(geo.axes.values()), ())), dtype=bool)
-    thigh, shank, foot = parts
+    thigh, shank, foot = (geo.axes[name] for name in names)
     ahead = unit(foot - np.outer(foot @ geo.up, geo.up))  # the way the foot points, level
     lean = np.degrees(np.arcsin(np.clip(np.sum(-shank * ahead, axis=-1), -1.0, 1.0)))
     with np.errstate(invalid="ignore"):

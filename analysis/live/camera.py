@@ -33,19 +33,15 @@ from analysis.kinematics import quaternions as quat
 from analysis.live.session import header_text
 from analysis.sources.errors import CaptureFileError
 from analysis.sources.ik import (
-    CHANNELS,
-    CHANNELS_ROOT,
     EULER_ORDER,
     JOINTS,
-    NAMES,
-    PARENTS,
     REQUIRED,
     UNITS_PER_METRE,
     complete,
-    end_sites,
     global_rotations,
     local_quaternions,
     rest_offsets,
+    standing_skeleton,
 )
 from analysis.sources.mediapipe import MIN_VISIBILITY, N_LANDMARKS, landmark_points
 from analysis.sources.names import MEDIAPIPE
@@ -100,15 +96,7 @@ class CameraStream:
         complete(seen)
         rotations = global_rotations(seen, REST_DIRS)
         offsets = rest_offsets(seen, rotations)
-        end_parents, end_offsets = end_sites(seen, offsets)
-        self.skeleton = Skeleton(
-            names=NAMES,
-            parents=np.array(PARENTS, dtype=np.int64),
-            offsets=offsets,
-            channels=tuple(CHANNELS_ROOT if p < 0 else CHANNELS for p in PARENTS),
-            end_site_parents=np.array(end_parents, dtype=np.int64),
-            end_site_offsets=end_offsets,
-        )
+        self.skeleton = standing_skeleton(seen, offsets)
         empty = np.zeros((0, self.target.n_channels))
         return header_text(Motion(self.target, empty, 1.0 / self.fps))
 

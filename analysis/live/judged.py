@@ -48,7 +48,9 @@ class RepetitionJudge:
         if mirrored != self._judge.mirrored:
             self._judge = judge_of(self.model, mirrored)
 
-    def score(self, a: int, b: int, mirror_image: bool, index: Sequence[int]) -> float:
+    def score(
+        self, a: int, b: int, mirror_image: bool, index: Sequence[int] | npt.NDArray[np.intp]
+    ) -> float:
         """The exercise model's score of frames a..b (0-100), as the offline analysis scores
         it (`stages.scoring_features`) from the frames so far: their positions facing their mean
         heading over their median body size; scored as the tutor's side for the mirror image;

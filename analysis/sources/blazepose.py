@@ -129,7 +129,8 @@ def _to_metres(world: FloatArray, data: dict[str, Any]) -> tuple[FloatArray, lis
     if not is_image_normalised(world):
         return world, ["The landmarks were read as world positions in metres."]
     width, height = data.get("width"), data.get("height")
-    if _positive(width) and _positive(height):
+    if isinstance(width, int | float) and isinstance(height, int | float) and _positive(width) \
+            and _positive(height):  # fmt: skip
         aspect, how = float(width) / float(height), f"{width}×{height} (from the file)"
     else:
         name = estimated_aspect(world)

@@ -313,8 +313,15 @@ def solve(points: Mapping[str, FloatArray], fps: float, smoothing: int = 1) -> S
     frames = np.concatenate((usable["pelvis"], euler.reshape(n, -1)), axis=1)
     if not np.all(np.isfinite(frames)):
         raise CaptureFileError("The file's positions do not form a body (values out of range).")
-    end_parents, end_offsets = end_sites(usable, offsets)
-    skeleton = Skeleton(
+    skeleton = standing_skeleton(usable, offsets)
+    return Solved(Motion(skeleton, frames, 1.0 / fps), bridged, estimated)
+
+
+def standing_skeleton(points: Mapping[str, FloatArray], offsets: FloatArray) -> Skeleton:
+    """The imported body's skeleton: its joints' rest offsets and the end sites the points give
+    (the live camera fits the same skeleton to its first complete frame)."""
+    end_parents, end_offsets = end_sites(points, offsets)
+    return Skeleton(
         names=NAMES,
         parents=np.array(PARENTS, dtype=np.int64),
         offsets=offsets,
@@ -322,4 +329,3 @@ def solve(points: Mapping[str, FloatArray], fps: float, smoothing: int = 1) -> S
         end_site_parents=np.array(end_parents, dtype=np.int64),
         end_site_offsets=end_offsets,
     )
-    return Solved(Motion(skeleton, frames, 1.0 / fps), bridged, estimated)

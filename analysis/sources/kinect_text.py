@@ -173,16 +173,16 @@ def read_per_joint(
         frames[-1][joint] = (xyz, _state(row[cols["state"]]) if "state" in cols else 2.0)
     check_frames(len(frames))
     names = list(dict.fromkeys(j for frame in frames for j in frame))
-    xyz = np.full((len(frames), len(names), 3), np.nan)
+    points = np.full((len(frames), len(names), 3), np.nan)
     state = np.full((len(frames), len(names)), 2.0)
     for f, frame in enumerate(frames):
         for k, name in enumerate(names):
             if name in frame:
-                xyz[f, k], state[f, k] = frame[name]
-    empty = np.all(np.isnan(xyz), axis=(1, 2))
-    xyz[state == NOT_TRACKED] = np.nan
+                points[f, k], state[f, k] = frame[name]
+    empty = np.all(np.isnan(points), axis=(1, 2))
+    points[state == NOT_TRACKED] = np.nan
     inferred = {n: (state[:, k] == INFERRED) for k, n in enumerate(names)}
-    tracks = {n: xyz[:, k] for k, n in enumerate(names)}
+    tracks = {n: points[:, k] for k, n in enumerate(names)}
     fps = fps_from_times(np.array(stamps)) if stamps else None
     return tracks, fps, Tracking(empty, inferred)
 

@@ -205,14 +205,16 @@ def _vicon(rows: list[list[float] | None]) -> ImportedRecording:
     return _imported(Found("vicon", layout, points, vicon.ART_FPS, used, [], notes))
 
 
-def _landmarks(world: FloatArray, fps: float | None, layout: str) -> ImportedRecording:
+def _landmarks(
+    world: FloatArray, fps: float | None, layout: str, kind: str = "mediapipe"
+) -> ImportedRecording:
     solved = mediapipe.motion_from_landmarks(world, fps or DEFAULT_FPS, smoothing=1)
     hidden = int(np.sum(np.all(np.isnan(world), axis=(1, 2))))
     notes = _gap_notes(solved)
     if hidden:
         notes.insert(0, f"No person was found in {hidden} frames; they were filled in.")
     used = tuple(MEDIAPIPE)
-    report = ImportReport("mediapipe", layout, used, (), tuple(notes))
+    report = ImportReport(kind, layout, used, (), tuple(notes))
     return ImportedRecording(_with_warnings(solved.motion, report.warnings), report)
 
 
@@ -225,6 +227,8 @@ def _json(content: bytes) -> ImportedRecording:
     if blazepose.is_keyed(data):
         return _keyed(blazepose.read_keyed(data))
     world, fps = mediapipe.landmarks_from_json(data)
+    if isinstance(data, dict) and data.get("source") == "camera":  # the camera page's session
+        return _landmarks(world, fps, "landmarks from the browser camera", kind="camera")
     return _landmarks(world, fps, "MediaPipe landmarks JSON")
 
 

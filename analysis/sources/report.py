@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from analysis.bvh.io import Motion
 
-KINDS = ("bvh", "kinect", "trc", "c3d", "mediapipe", "video", "vicon")
+KINDS = ("bvh", "kinect", "trc", "c3d", "mediapipe", "video", "vicon", "camera")
 
 
 @dataclass(frozen=True)

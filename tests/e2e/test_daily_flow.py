@@ -177,8 +177,9 @@ def test_8_progress_pdf_draws_range_of_motion_per_exercise(page, live_server, de
         p.extract_text()
         for p in PdfReader(io.BytesIO(Path(download.value.path()).read_bytes())).pages
     )
-    assert "Deep squat: range of motion by session" in text
-    assert "Shoulder abduction: range of motion by session" in text
+    # each exercise's chart plots the clinical angles it moves most (knees and hips for a squat)
+    assert "Deep squat: range of the joint angles moved most, by session" in text
+    assert "Shoulder abduction: range of the joint angles moved most, by session" in text
     assert "range of motion (°)" in text and "date of the session" in text
     assert not RIG_NAME.search(text)
 

@@ -62,13 +62,34 @@ def test_reference_plays_is_replaced_and_a_rule_is_picked(page, live_server, ana
     assert page.inner_text("#reference-player [data-clock]").endswith(" s")
 
     # Replace the reference through the page.
+    old_frames = list(exercise.tutor_landmark_frames)
     page.click("text=Replace the reference recording")
     page.set_input_files("#id_tutor", str(NEW_REFERENCE))
     page.click("button[type=submit]")
-    page.wait_for_url(f"{live_server.url}/exercises/{exercise.pk}/")
-    assert "model version 2 (in use)" in page.inner_text("#training-report")
+    page.wait_for_url(f"{live_server.url}/exercises/{exercise.pk}/annotate/")
+    page.goto(f"{live_server.url}/exercises/{exercise.pk}/")
+    # Nothing is built from the old recording's key-pose frames: version 1 stays in use until the
+    # therapist confirms the key poses suggested from the new recording.
+    notice = page.inner_text("#confirm-key-poses")
+    assert "model version 1 stays in use" in notice, notice
+    exercise.refresh_from_db()
+    assert exercise.models.count() == 1 and exercise.active_model.version == 1
+    suggested = page.evaluate(
+        f"async () => (await fetch('{live_server.url}/exercises/{exercise.pk}/tutor.json')).json()"
+    )
+    page.goto(f"{live_server.url}/exercises/{exercise.pk}/annotate/")
+    page.wait_for_selector("#annotate[data-ready='1']", state="attached")
+    page.click("#save-landmarks")
+    page.wait_for_function(
+        "document.getElementById('landmarks-status').textContent"
+        ".startsWith('Saved. Model version 2')"
+    )
     exercise.refresh_from_db()
     assert exercise.models.count() == 2 and exercise.active_model.version == 2
+    assert exercise.tutor_landmark_frames == list(suggested["suggested_frames"]) != old_frames
+    page.goto(f"{live_server.url}/exercises/{exercise.pk}/")
+    assert "model version 2 (in use)" in page.inner_text("#training-report")
+    assert page.locator("#confirm-key-poses").count() == 0
 
     after = result(page, live_server.url, recording)
     assert after["model_version"] == 1

@@ -77,7 +77,7 @@ def test_two_squats_counted_live_and_saved_as_landmarks(squat_model):
     assert events[-1]["repetitions"] == 2
 
     imported = read_recording("camera.json", stream.recording_json())
-    assert imported.report.kind == "mediapipe"
+    assert imported.report.kind == "camera"  # the result says where it came from
     assert imported.motion.n_frames == len(values) == session.next_seq
     assert imported.motion.frame_time == pytest.approx(1.0 / fps)
 

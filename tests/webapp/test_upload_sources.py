@@ -6,6 +6,7 @@ its ``source``; a CSV that holds no joint positions is refused in words."""
 from __future__ import annotations
 
 import gzip
+from pathlib import Path
 
 import pytest
 from django.core.exceptions import ValidationError
@@ -102,3 +103,33 @@ def test_an_exercise_tutor_stays_bvh_only():
     with pytest.raises(ValidationError, match="Upload a BVH"):
         parse_upload(SimpleUploadedFile("tutor.trc", content))
     assert parse_upload(SimpleUploadedFile("take.trc", content), any_source=True).kind == "trc"
+
+
+KERAAL = Path(__file__).resolve().parents[1] / "analysis" / "fixtures" / "keraal"
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [
+        ("G3-Kinect-CTK-P1T1-Unknown-C-0.txt", "kinect"),
+        ("G3-Vicon-CTK-P1T1-Unknown-C-0.txt", "vicon"),
+    ],
+)
+def test_the_api_accepts_a_recorders_own_text_file(
+    world, exercise, django_capture_on_commit_callbacks, name, kind
+):
+    """Files a Kinect and a Vicon system wrote themselves (KERAAL), under their own `.txt`."""
+    api = APIClient()
+    api.force_authenticate(world.therapist)
+    data = {
+        "patient": str(world.patient.pk),
+        "exercise": str(exercise.pk),
+        "file": SimpleUploadedFile(name, (KERAAL / name).read_bytes()),
+    }
+    with django_capture_on_commit_callbacks(execute=True):
+        created = api.post("/api/v1/recordings/", data, format="multipart")
+    assert created.status_code == 201, created.content
+    detail = api.get(f"/api/v1/recordings/{created.json()['id']}/").json()
+    assert detail["status"] == "succeeded", detail
+    assert detail["result"]["source"]["kind"] == kind
+    assert Recording.objects.get().file.name.endswith(".txt")

@@ -26,7 +26,7 @@ from analysis.feedback import GrammarError, check_names
 from analysis.landmarks import suggest_key_poses
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
 from webapp.audit import log
-from webapp.exercises import services
+from webapp.exercises import body_parts, services
 from webapp.exercises.annotate_data import (
     angle_curves,
     default_grammar_text,
@@ -208,7 +208,7 @@ def grammar_verdict(text: str, exercise: Exercise) -> dict:
     except GrammarError as error:
         return {
             "valid": False,
-            "message": in_tick_words(error.message, written, plain_labels(skeleton)),
+            "message": in_tick_words(error.message, written, body_parts.plain_labels(skeleton)),
             "line": error.line,
             "column": error.column,
         }

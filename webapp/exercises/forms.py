@@ -13,7 +13,7 @@ REFERENCE_HELP = (
     "the whole body, which the system takes about a minute to read."
 )
 REFERENCE_WIDGET = forms.ClearableFileInput(
-    attrs={"accept": ".bvh,.gz,.csv,.json,.trc,.c3d,.mp4,.mov,.webm"}
+    attrs={"accept": ".bvh,.gz,.csv,.txt,.json,.trc,.c3d,.mp4,.mov,.webm"}
 )
 
 

@@ -107,7 +107,7 @@ class Exercise(models.Model):
         ending = next((e for e in KIND_BY_ENDING if name.endswith(e)), None)
         if ending is not None:
             return KIND_BY_ENDING[ending]
-        if not name.endswith((".csv", ".json")):
+        if not name.endswith((".csv", ".json", ".txt")):
             return "bvh"
         return self.read_tutor()[1]
 

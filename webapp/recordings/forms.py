@@ -49,12 +49,12 @@ class UploadForm(forms.Form):
     )
     file = forms.FileField(
         help_text=(
-            "A motion-capture recording: BVH (.bvh, .bvh.gz), Kinect joint positions (.csv), "
-            "Azure Kinect or MediaPipe (.json), .trc or .c3d; or a phone video (.mp4, .mov, "
-            ".webm) of the whole body."
+            "A motion-capture recording: BVH (.bvh, .bvh.gz), Kinect joint positions (.csv or "
+            "the Kinect's own .txt), Azure Kinect, BlazePose or MediaPipe (.json), Vicon target "
+            "text (.txt), .trc or .c3d; or a phone video (.mp4, .mov, .webm) of the whole body."
         ),
         widget=forms.ClearableFileInput(
-            attrs={"accept": ".bvh,.gz,.csv,.json,.trc,.c3d,.mp4,.mov,.webm"}
+            attrs={"accept": ".bvh,.gz,.csv,.txt,.json,.trc,.c3d,.mp4,.mov,.webm"}
         ),
     )
     pain_score = forms.IntegerField(

@@ -92,7 +92,8 @@ def reasons_of(rep: RepetitionResult, stored: Mapping[str, Any], passed: bool, b
         return []
     found = getattr(rep, "reasons", None)
     if found is None:
-        found = stored.get("reasons") if isinstance(stored.get("reasons"), list) else ()
+        kept = stored.get("reasons")
+        found = kept if isinstance(kept, list) else ()
     reasons = [str(text) for text in found if text]
     if not reasons and not passed:
         reasons = [f"Movement {guidance_words(g.type)}." for g in rep.guidance]
@@ -209,18 +210,22 @@ def figures(
 def build_many(runs: Iterable[AnalysisRun]) -> dict[Any, RunReading]:
     """Build and store the readings of these succeeded runs (five queries whatever their
     number); keyed by run id. A run whose summary cannot be read gets none (its pages say so)."""
-    ready = [r for r in runs if r.status == RunStatus.SUCCEEDED and r.result is not None]
-    fixes = corrections_of([run.pk for run in ready])
+    ready = [
+        (run, result)
+        for run in runs
+        if run.status == RunStatus.SUCCEEDED and (result := run.result) is not None
+    ]
+    fixes = corrections_of([run.pk for run, _ in ready])
     readings = {
-        run.pk: RunReading(run_id=run.pk, **figures(run.result, run.summary, fixes[run.pk]))
-        for run in ready
+        run.pk: RunReading(run_id=run.pk, **figures(result, run.summary, fixes[run.pk]))
+        for run, result in ready
     }
     # A worker and a page may build the same run at once: both write the same figures.
     RunReading.objects.bulk_create(
         readings.values(), batch_size=500, update_conflicts=True, unique_fields=["run"],
         update_fields=[*FIELDS, "built_at"],
     )  # fmt: skip
-    for run in ready:
+    for run, _ in ready:
         run._state.fields_cache["reading"] = readings[run.pk]
     return readings
 

@@ -47,6 +47,11 @@ RELIABILITY = {
         "arm and leg angles facing the camera",
         "movement toward or away from the camera, the trunk, ankles and feet",
     ),
+    "camera": SourceReliability(
+        "the browser's camera, live (body landmarks found on the device)",
+        "arm and leg angles facing the camera",
+        "movement toward or away from the camera, the trunk, ankles and feet",
+    ),
     "video": SourceReliability(
         "a phone video",
         "knee, hip and elbow bending seen from the side, arm raising seen from the front",

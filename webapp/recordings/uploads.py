@@ -114,8 +114,8 @@ def parse_upload(upload: UploadedFile, *, any_source: bool = False) -> ParsedUpl
     if not name.lower().endswith(ACCEPTED_SUFFIXES):
         raise ValidationError(
             "Upload a BVH motion-capture file (.bvh or .bvh.gz) or another capture file: Kinect "
-            "joint positions (.csv), Azure Kinect or MediaPipe (.json), .trc, .c3d, or a video "
-            "(.mp4, .mov, .webm)."
+            "joint positions (.csv or .txt), Azure Kinect, BlazePose or MediaPipe (.json), Vicon "
+            "target text (.txt), .trc, .c3d, or a video (.mp4, .mov, .webm)."
         )
     content = read_upload(upload)
     if len(content) > settings.MAX_UPLOAD_BYTES:

@@ -93,6 +93,8 @@ def recording_content(recording) -> dict[str, Any]:
     if not content["analysed"]:
         return content
     result, reading = run.result, reading_of(run)
+    if reading is None:  # a summary that cannot be read: the report says it was not analysed
+        return {**content, "analysed": False}
     content["score"] = fmt(reading.score)
     content["passed_line"] = passed_line(reading)
     content.update(repetition_content(run, recording, reading))
