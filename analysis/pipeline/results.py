@@ -115,6 +115,12 @@ class RepetitionResult:
         """The most pressing guidance type, "" when there is none."""
         return self.guidance[0].type if self.guidance else ""
 
+    def analysis_verdict(self, pass_threshold: float) -> bool:
+        """Whether the analysis passed it: its stored verdict, or for a run stored before
+        verdicts were kept, its score against that run's pass threshold (the one place the
+        rule for old runs lives; the web side's reading asks here)."""
+        return bool(self.passed) if self.passed is not None else self.score >= pass_threshold
+
     def to_json(self) -> JSON:
         return {
             "start": self.start, "end": self.end, "peak": self.peak, "score": self.score,

@@ -63,9 +63,7 @@ def verdict(rep: RepetitionResult, threshold: float, label: bool | None) -> tupl
     """(passed, by whom): the therapist's label first, then the analysis."""
     if label is not None:
         return bool(label), THERAPIST
-    if rep.passed is not None:
-        return bool(rep.passed), ANALYSIS
-    return rep.score >= threshold, ANALYSIS
+    return rep.analysis_verdict(threshold), ANALYSIS
 
 
 def shown_score(score: float, threshold: float) -> int:
