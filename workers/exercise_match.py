@@ -23,8 +23,10 @@ def spoken(exercise: Exercise) -> str:
     return f"the exercise \u201c{exercise.name}\u201d"
 
 
-def match_context(exercise: Exercise) -> MatchContext:
-    """The exercise's name and the clinic's other exercises that have a readable tutor."""
+def match_context(exercise: Exercise, recorder: str | None = None) -> MatchContext:
+    """The exercise's name and the clinic's other exercises that have a readable tutor;
+    ``recorder``: the recording's source kind (`analysis.sources.RecordingSource.kind`), to
+    say whether it was captured as the exercise's reference was."""
     others = (
         Exercise.objects.filter(clinic_id=exercise.clinic_id, archived_at__isnull=True)
         .exclude(pk=exercise.pk)
@@ -39,4 +41,5 @@ def match_context(exercise: Exercise) -> MatchContext:
             log.info("exercise %s left out of the fit check", other.pk, exc_info=True)
             continue
         candidates.append(Candidate(str(other.pk), spoken(other), features))
-    return MatchContext(spoken(exercise), tuple(candidates))
+    same = recorder is None or recorder == exercise.tutor_kind()
+    return MatchContext(spoken(exercise), tuple(candidates), same_recorder=same)

@@ -20,6 +20,7 @@ from django.utils import timezone
 
 from analysis import __version__ as code_version
 from analysis.pipeline import FittedModel, ModelVersionError, build_model, dump_model, load_model
+from webapp.exercises.annotate_data import rig_grammar
 from webapp.exercises.models import Exercise, ExerciseModel, ModelStatus
 from workers import training
 
@@ -54,7 +55,7 @@ def fit_for_exercise(
         landmark_types=list(exercise.tutor_landmark_types),
         joints=list(exercise.involved_joints) or None,
         type_names={int(k): v for k, v in exercise.landmark_type_names.items()},
-        grammar=exercise.feedback_grammar or None,
+        grammar=rig_grammar(exercise.feedback_grammar, tutor.skeleton) or None,
         training=training.training_recordings(exercise),
         on_progress=on_progress,
     )

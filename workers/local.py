@@ -1,11 +1,12 @@
 """`make run`: the web server and a real Celery worker beside it, with nothing to install.
 
-``python -m workers.local [ADDRESS:PORT]`` starts two processes and stops both, with everything
-they started, when it is stopped (Ctrl-C, SIGTERM, SIGHUP) or when the server ends: each runs in a
-process group of its own, which gets SIGTERM, then SIGKILL after ``STOP_SECONDS``; each dies with
-the launcher if the launcher itself is killed (the kernel's parent-death signal, Linux), and so do
-the worker's pool and beat processes (workers/celery.py). A worker that ends on its own (killed,
-out of memory) is started again, up to ``WORKER_RESTARTS`` times, so uploads keep being analysed:
+``python -m workers.local [--demo] [ADDRESS:PORT]`` starts two processes and stops both, with
+everything they started, when it is stopped (Ctrl-C, SIGTERM, SIGHUP) or when the server ends: each
+runs in a process group of its own, which gets SIGTERM, then SIGKILL after ``STOP_SECONDS``; each
+dies with the launcher if the launcher itself is killed (the kernel's parent-death signal, Linux),
+and so do the worker's pool and beat processes (workers/celery.py). A worker that ends on its own
+(killed, out of memory) is started again, up to ``WORKER_RESTARTS`` times, so uploads keep being
+analysed:
 
 * ``celery -A workers worker -B``: consumes every queue and runs the beat schedule (requeue lost
   runs, refresh the attention list …);
@@ -14,6 +15,10 @@ out of memory) is started again, up to ``WORKER_RESTARTS`` times, so uploads kee
   key once (``DATA_DIR/secret_key``) and serves static files through WhiteNoise; plain HTTP on
   this machine, so no HTTPS redirect or secure-only cookies. ``DEBUG=1`` (or any of these set in
   the environment) wins; with DEBUG on, runserver also reloads itself when the code changes.
+
+With ``--demo`` (`make run`) it first loads the demo clinic (``manage.py load_demo``) in the same
+environment, so the demo's analyses go to the worker's queue: the page is up in seconds and the
+demo's recordings show as being analysed, as any upload does, until the worker is done.
 
 Both get ``LOCAL_BROKER_DIR`` (``DATA_DIR/broker``): the settings then use kombu's filesystem
 transport, one file per message in that folder, and no eager execution, so an upload returns as
@@ -178,9 +183,16 @@ def say(message: str) -> None:
     print(f"workers.local: {message}", file=sys.stderr, flush=True)
 
 
-def serve(address: str, env: Mapping[str, str]) -> int:
-    """Run the worker and the server until the server ends or this process is told to stop."""
+def demo_command() -> list[str]:
+    return [sys.executable, str(ROOT / "manage.py"), "load_demo"]
+
+
+def serve(address: str, env: Mapping[str, str], *, demo: bool = False) -> int:
+    """Run the worker and the server until the server ends or this process is told to stop;
+    with ``demo``, load the demo clinic first (its analyses queued for the worker)."""
     env = local_env(env)
+    if demo:
+        subprocess.run(demo_command(), env=env, cwd=ROOT, check=True)
     server = server_command(address, reload=debug_on(env))
     return supervise(worker_command(env), server, env)
 
@@ -235,8 +247,10 @@ class Supervisor:
 
 
 def main(argv: Sequence[str]) -> int:
-    address = argv[0] if argv else DEFAULT_ADDRESS
-    return serve(address, os.environ)
+    demo = "--demo" in argv
+    rest = [arg for arg in argv if arg != "--demo"]
+    address = rest[0] if rest else DEFAULT_ADDRESS
+    return serve(address, os.environ, demo=demo)
 
 
 if __name__ == "__main__":

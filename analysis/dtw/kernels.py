@@ -25,8 +25,6 @@ import numba as nb
 import numpy as np
 import numpy.typing as npt
 
-from analysis.dtw.frame_costs import MODE_EUC
-
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 ByteArray = npt.NDArray[np.uint8]
@@ -279,61 +277,6 @@ def typev_end_state(D3: FloatArray, i: int, j: int) -> int:
     if row[2, j] < row[s, j]:
         s = 2
     return s
-
-
-@nb.njit(cache=True, nogil=True)
-def _diag_costs(  # noqa: PLR0917
-    mode: int, xf: FloatArray, yf: FloatArray, n: int, m: int, ilo: int, off: int,
-    tmp: FloatArray, cnt: int,
-) -> None:  # fmt: skip
-    """Local costs of cnt anti-diagonal cells into tmp[0:cnt]; xf, yf: x^T and reversed y^T
-    flattened, so every feature row is read contiguously (the loops vectorise)."""
-    for t in range(cnt):
-        tmp[t] = 0.0
-    for k in range(xf.size // n):
-        xr, yr = xf[k * n + ilo :], yf[k * m + off + ilo :]
-        for t in range(cnt):
-            q = xr[t] - yr[t]
-            tmp[t] += q * q
-    if mode == MODE_EUC:
-        for t in range(cnt):
-            tmp[t] = np.sqrt(tmp[t])
-
-
-@nb.njit(cache=True, nogil=True)
-def _diag_step(  # noqa: PLR0917
-    tmp: FloatArray, diag: FloatArray, up: FloatArray, left: FloatArray, cur: FloatArray, cnt: int
-) -> None:
-    for t in range(cnt):
-        v, u, w = diag[t], up[t], left[t]
-        v = u if u < v else v
-        v = w if w < v else v
-        cur[t] = tmp[t] + v
-
-
-@nb.njit(cache=True, nogil=True)
-def antidiagonal_cost(mode: int, xf: FloatArray, yf: FloatArray, n: int, m: int) -> float:
-    """Closed-end symmetric DTW cost, swept along anti-diagonals so the inner loops vectorise.
-
-    xf is x^T (d, n) flattened and yf is y reversed then transposed (d, m) flattened: the cells
-    (i, k - i) of anti-diagonal k then read both contiguously. Cells of one anti-diagonal do not
-    depend on each other. Buffers are indexed by i + 1 (index 0 is a permanent +inf pad) and the
-    cell just past each diagonal is reset to +inf so that no older diagonal is ever read.
-    """
-    p2, p1, cur = np.full(n + 1, INF), np.full(n + 1, INF), np.full(n + 1, INF)
-    tmp = np.empty(n)
-    for k in range(n + m - 1):
-        ilo, ihi = max(0, k - m + 1), min(k, n - 1)
-        cnt = ihi - ilo + 1
-        _diag_costs(mode, xf, yf, n, m, ilo, m - 1 - k, tmp, cnt)
-        if k == 0:
-            cur[1] = tmp[0]
-        else:
-            _diag_step(tmp, p2[ilo:], p1[ilo:], p1[ilo + 1 :], cur[ilo + 1 :], cnt)
-        if ihi + 2 <= n:
-            cur[ihi + 2] = INF
-        p2, p1, cur = p1, cur, p2
-    return p1[n]
 
 
 @nb.njit(cache=True, nogil=True)

@@ -42,9 +42,11 @@ the other counts once, with their mean frame.
 Fast paths (numba, in ``analysis.dtw.kernels``) are chosen automatically: local costs computed in
 cache-sized row blocks on a second thread while the DP consumes the previous block (Euclidean
 costs with 16 or more features as one matrix product per block, ``analysis.dtw.cost_blas``),
-a vectorised anti-diagonal sweep for closed unbanded distances with few features, two rows of
+a vectorised anti-diagonal sweep for closed unbanded alignments with few features (with or
+without the path, ``analysis.dtw.diagonal_kernels``), two rows of
 memory when no path is wanted, and a batched kernel for many queries against one reference
-(``align_batch`` / ``distance_batch``), one slice of queries per core.
+(``align_batch`` / ``distance_batch``), one slice of queries per core
+(``analysis.dtw.row_blocks``).
 ``tests/dtw_reference.py`` is the plain version they are tested against.
 """
 
@@ -52,7 +54,6 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -61,6 +62,7 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.dtw import cost_blas
+from analysis.dtw import diagonal_kernels as diag_kern
 from analysis.dtw import kernels as kern
 from analysis.dtw.cost_blas import single_threaded_blas
 from analysis.dtw.frame_costs import (
@@ -73,11 +75,11 @@ from analysis.dtw.frame_costs import (
     joint_weights,
     speed_insensitive_cost,
 )
+from analysis.dtw.row_blocks import pool, run_rows
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 StepKind = Literal["symmetric", "type-v"]
-_BLOCK_CELLS = 1 << 19  # cells per cost block: 4 MiB of float64, stays in cache
 _DIAGONAL_MAX_DIM = 8  # the anti-diagonal sweep recomputes costs per diagonal: few features only
 # Below this much work (DP cells, plus local-cost work counted as one cell per 16 features) a
 # second thread costs more than it saves: about 2 ms on one core.
@@ -210,26 +212,6 @@ class DPState:
         return np.ascontiguousarray(out[:k][::-1])
 
 
-def run_rows(ci: CostInputs, lo: IntArray, hi: IntArray, buf: DPState) -> None:
-    """Fill the DP for all rows in cache-sized blocks: a second thread computes the local costs
-    of the next block while this thread runs the DP over the current one (both release the GIL)."""
-    n, m = ci.x.shape[0], ci.y.shape[0]
-    rows = min(n, max(4, _BLOCK_CELLS // m))
-    blocks = [(i0, min(n, i0 + rows)) for i0 in range(0, n, rows)]
-    spare = [np.empty((rows, m)) for _ in range(2)]
-
-    def costs(k: int) -> FloatArray:
-        i0, i1 = blocks[k]
-        return ci.rows(i0, i1, lo, hi, spare[k % 2])
-
-    with single_threaded_blas(ci.uses_blas and n >= cost_blas.MIN_ROWS):
-        pending = _pool().submit(costs, 0) if len(blocks) > 1 else None
-        for k, (i0, i1) in enumerate(blocks):
-            C = pending.result() if pending is not None else costs(k)
-            pending = _pool().submit(costs, k + 1) if k + 1 < len(blocks) else None
-            buf.rows(C, i0, i1, lo, hi)
-
-
 def _end_cell(buf: DPState, lo: IntArray, hi: IntArray) -> tuple[int, float]:
     """End column of the path (m - 1, or the open-end argmin) and the accumulated cost there."""
     n, m, opt = len(lo), buf.D.shape[-1], buf.opt
@@ -256,6 +238,11 @@ def align(x: npt.ArrayLike, y: npt.ArrayLike, options: DTWOptions | None = None)
     opt = options or DTWOptions()
     xa, ya, ci = prepare(x, y, opt)
     n, m = len(xa), len(ya)
+    if _diagonal_sweep(opt, ci) and not opt.return_matrix:
+        cost, path = diag_kern.antidiagonal_path(ci.mode, *_diagonal_inputs(ci), n, m)
+        if opt.speed_insensitive:
+            cost = speed_insensitive_cost(xa, ya, path, opt.cost, opt.weights)
+        return _result(cost, path, None)
     lo, hi = band_limits(n, m, opt)
     buf = DPState(n, m, opt, path=True)
     run_rows(ci, lo, hi, buf)
@@ -273,15 +260,27 @@ def distance(x: npt.ArrayLike, y: npt.ArrayLike, options: DTWOptions | None = No
         return align(x, y, opt).cost
     xa, ya, ci = prepare(x, y, opt)
     n, m = len(xa), len(ya)
-    plain = opt == DTWOptions(cost=opt.cost)
-    if plain and ci.mode in (MODE_EUC, MODE_SQ) and xa.shape[1] <= _DIAGONAL_MAX_DIM:
-        # Closed, unbanded, unweighted, few features: the vectorised anti-diagonal sweep.
-        xf, yf = ci.x.T.ravel(), ci.yt[:, ::-1].ravel()
-        return float(kern.antidiagonal_cost(ci.mode, xf, yf, n, m))
+    if _diagonal_sweep(opt, ci):
+        xf, yf = _diagonal_inputs(ci)
+        return float(diag_kern.antidiagonal_cost(ci.mode, xf, yf, n, m))
     lo, hi = band_limits(n, m, opt)
     buf = DPState(n, m, opt, path=False)
     run_rows(ci, lo, hi, buf)
     return _end_cell(buf, lo, hi)[1]
+
+
+def _diagonal_sweep(opt: DTWOptions, ci: CostInputs) -> bool:
+    """Closed, unbanded, unweighted, few features: the vectorised anti-diagonal sweep applies
+    (it recomputes local costs per diagonal, cheap only for few features)."""
+    closed = opt == DTWOptions(
+        cost=opt.cost, speed_insensitive=opt.speed_insensitive, return_matrix=opt.return_matrix
+    )
+    return closed and ci.mode in (MODE_EUC, MODE_SQ) and ci.x.shape[1] <= _DIAGONAL_MAX_DIM
+
+
+def _diagonal_inputs(ci: CostInputs) -> tuple[FloatArray, FloatArray]:
+    """x^T and reversed y^T, flattened: the layout ``analysis.dtw.diagonal_kernels`` reads."""
+    return ci.x.T.ravel(), ci.yt[:, ::-1].ravel()
 
 
 def _result(cost: float, path: IntArray, matrix: FloatArray | None) -> Alignment:
@@ -354,15 +353,10 @@ def _cuts(count: int, work: int) -> list[tuple[int, int]]:
 
 def _parallel(calls: list[Callable[[], object]]) -> None:
     """Run GIL-releasing calls concurrently: all but the first in the pool, the first here."""
-    futures = [_pool().submit(c) for c in calls[1:]]
+    futures = [pool().submit(c) for c in calls[1:]]
     calls[0]()
     for f in futures:
         f.result()
-
-
-@functools.cache
-def _pool() -> ThreadPoolExecutor:
-    return ThreadPoolExecutor(max_workers=max(2, nb.get_num_threads()), thread_name_prefix="dtw")
 
 
 def distance_batch(

@@ -27,6 +27,7 @@ so a long condition may wrap), e.g.::
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cache, reduce
 from typing import Any
@@ -85,9 +86,9 @@ _TERMINAL_WORDS = {
     "_RPAR": "')'",
     "_TYPE": "type$N",
     "_DOLLAR": "'$'",
-    "_AT": "@JOINT$N",
+    "_AT": "@body_part$N",
     "_PCT": "%KIND$ANGLE",
-    "JOINT": "a joint name",
+    "JOINT": "a body part",
     "NUMBER": "a number",
     "TEXT": "a text in double quotes",
     "$END": "the end of the grammar",
@@ -232,6 +233,25 @@ def parse_rules(text: str) -> tuple[Rule, ...]:
     return _ToTree().transform(tree)  # type: ignore[return-value]
 
 
+# A joint condition, or what the rename skips: a quoted text or a comment (which may hold "@x$1").
+_JOINT_OR_SKIPPED = re.compile(r'"[^"\n]*"|#[^\n]*|(@\s*)([A-Za-z_][A-Za-z0-9_.:]*)')
+
+
+def rename_joints(text: str, rename: Callable[[str], str]) -> str:
+    """``text`` with each body part written in an ``@JOINT$L`` condition replaced by
+    ``rename(JOINT)``, everything else (texts, comments, layout, so line numbers) kept as is.
+
+    The exercise page lets a therapist write body parts in the words of its ticks (``@hips$3``);
+    the analysis matches a grammar's joints to the rig's own names (``Waist``)."""
+
+    def replaced(found: re.Match[str]) -> str:
+        if found.group(2) is None:
+            return found.group(0)
+        return found.group(1) + rename(found.group(2))
+
+    return _JOINT_OR_SKIPPED.sub(replaced, text)
+
+
 def _line_of(text: str, line: int) -> str:
     lines = text.splitlines()
     return lines[line - 1] if 0 < line <= len(lines) else ""
@@ -266,7 +286,7 @@ def _explain_character(char: str) -> str:
         return "write the arrow between the condition and its feedback or tip as '->'"
     return (
         f"unexpected character {char!r}; a rule looks like "
-        'type$2 & @LEFT_KNEE$3 -> F:"feedback", T:"tip"'
+        'type$2 & @left_knee$3 -> F:"feedback", T:"tip"'
     )
 
 
@@ -293,7 +313,10 @@ def _explain_token(error: UnexpectedToken, text: str) -> str:
 def _explain_misplaced(error: UnexpectedToken, found: str) -> str:
     kind = error.token.type
     if kind == "JOINT" and {"_AT", "_TYPE"} & set(error.expected):
-        return f"unknown word {found}: write type$N for a landmark type or @JOINT$N for a joint"
+        return (
+            f"unknown word {found}: write type$N for a kind of key pose or @body_part$N for a "
+            "body part"
+        )
     if kind in {"_FEEDBACK", "_TIP"} and "_COMMA" in error.expected:
         return "separate the feedback and the tip with ','; a rule has at most one of each"
     if kind == "TEXT":

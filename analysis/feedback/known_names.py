@@ -31,13 +31,18 @@ Leaf = LandmarkType | JointLevel | FindingIs
 
 
 def check_names(
-    text: str, joints: Collection[str], types: Mapping[int, str] | Collection[int]
+    text: str,
+    joints: Collection[str],
+    types: Mapping[int, str] | Collection[int],
+    also: Collection[str] = (),
 ) -> tuple[Rule, ...]:
     """Parse ``text`` and check every body part and key-pose type it names against the
     exercise's ``joints`` (as the grammar writes them) and ``types`` (numbers, or numbers with
-    their names); returns the rules, raises `GrammarError` (line, column) otherwise."""
+    their names); returns the rules, raises `GrammarError` (line, column) otherwise. ``also``:
+    body-part names accepted without being offered in the message (earlier spellings, which
+    stored rules may still use)."""
     rules = parse_rules(text)
-    known = {joint_label(j) for j in joints} | set(joints)
+    known = {joint_label(j) for j in (*joints, *also)} | set(joints) | set(also)
     for rule in rules:
         for leaf in leaves(rule.condition):
             problem = unknown_name(leaf, known, joints, types)

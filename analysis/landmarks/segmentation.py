@@ -9,7 +9,9 @@ Repetitions are the signal's peaks that stand out twice over: by at least `MIN_P
 units (so sensor jitter in a rest pose never counts, whatever the patient's range), and by at least
 `RELATIVE_PROMINENCE` of their own height above the recording's rest level (so a patient who only
 half returns between two humps of one repetition, as in sit-to-stand, is not counted twice, while
-a patient with a small range still is). A median filter first removes the one-frame spikes of
+a patient with a small range still is); and they rise `MIN_PROMINENCE` above the rest level (the
+live counter's rule as well), so that the return to rest of a take that ends below it, a lifter
+stepping out of the rack, is no repetition. A median filter first removes the one-frame spikes of
 optical and depth sensors, and the recording's ends are padded with its rest level so that a
 repetition cut off by the end of the recording still counts.
 
@@ -45,6 +47,12 @@ REST_PERCENTILE = 5.0  # the recording's rest level: this percentile of the smoo
 REST_SPLIT = 0.45
 UNCONFIRMED_HEIGHT = 0.6  # of the confirmed peaks' median height: a peak no key pose confirms
 GAP_FACTOR = 1.6  # spacings: a gap this wide between peaks holds a repetition the axis missed
+# A key pose the axis has no peak for marks a missed repetition only where the axis moves near it:
+# the signal rises there by half `MIN_PROMINENCE` (the live counter's bar for a hump in a gap) and
+# by `MISSED_SHARE` of the kept peaks' median height. A phone video's standing pauses wobble by
+# 2-3 % of its squats (the classifier still finds "end of range" poses in them); UI-PRMD's one
+# missed repetition so rescued (m08 s05, a short one) rises by 14 %.
+MISSED_SHARE = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,6 +122,9 @@ def find_repetition_peaks(
     # stay three distinct frames (landmarks must be)
     peaks = np.clip(peaks - pad, 1, max(height.size - 2, 1))
     keep = props["prominences"] >= relative * np.maximum(height[peaks], 1e-9)
+    # above the rest level too: a take that ends (or starts) below its rest, the lifter stepping
+    # out of the rack, makes the return to rest prominent against the padding
+    keep &= height[peaks] >= MIN_PROMINENCE
     return np.unique(peaks[keep]).astype(np.int64)
 
 
@@ -124,19 +135,27 @@ def fuse_peaks(height: FloatArray, key_peaks: IntArray, rep_frames: float) -> In
     count a twitch; the key poses count cycles but may miss or split one. So every clear peak of
     the axis (`find_repetition_peaks`) that a key-pose end of range confirms within a third of a
     repetition is kept; an unconfirmed one only if it rises at least `UNCONFIRMED_HEIGHT` of the
-    confirmed peaks' median height; and a key-pose end of range the axis has no peak for is
-    added where it falls in a gap between kept peaks wide enough for two repetitions
-    (`GAP_FACTOR` times their median spacing), at least half a spacing from either side.
+    confirmed peaks' median height (of all the clear peaks' when none is confirmed); and a
+    key-pose end of range the axis has no peak for is added where it falls in a gap between kept
+    peaks wide enough for two repetitions (`GAP_FACTOR` times their median spacing), at least
+    half a spacing from either side, and where the axis moves near it (`moves_near`): a key pose
+    in a still rest is no repetition.
     """
     window = max(int(rep_frames / 3), 1)
     key = np.sort(np.asarray(key_peaks, dtype=np.int64))
     strict = find_repetition_peaks(height, rep_frames)
     sure = _near(strict, key, window)
-    typical = float(np.median(height[strict[sure]])) if sure.any() else 0.0
+    # with no peak confirmed (a classifier trained on another recorder may place every end of
+    # range off the axis's peaks), the axis's own peaks set the height a repetition reaches
+    confirmed = strict[sure] if sure.any() else strict
+    typical = float(np.median(height[confirmed])) if confirmed.size else 0.0
     kept = strict[sure | (height[strict] >= UNCONFIRMED_HEIGHT * typical)]
     lonely = key[~_near(key, kept, window)]
     if kept.size < 2 or lonely.size == 0:
         return kept.astype(np.int64)
+    typical = float(np.median(height[kept]))
+    moving = [f for f in lonely.tolist() if moves_near(height, f, window, typical)]
+    lonely = np.array(moving, dtype=np.int64)
     spacing = float(np.median(np.diff(kept)))
     bounds = np.concatenate([[-np.inf], kept, [np.inf]])
     extra = []
@@ -146,6 +165,16 @@ def fuse_peaks(height: FloatArray, key_peaks: IntArray, rep_frames: float) -> In
         if before + after > GAP_FACTOR * spacing and min(before, after) >= 0.5 * spacing:
             extra.append(frame)
     return np.unique(np.concatenate([kept, extra])).astype(np.int64)
+
+
+def moves_near(height: FloatArray, frame: int, window: int, typical: float) -> bool:
+    """Whether ``height`` rises within ``window`` frames of ``frame`` by half `MIN_PROMINENCE`
+    and by `MISSED_SHARE` of ``typical`` (the recording's repetitions' height)."""
+    near = height[max(frame - window, 0) : frame + window + 1]
+    if near.size == 0:
+        return False
+    rise = float(near.max() - near.min())
+    return rise >= 0.5 * MIN_PROMINENCE and rise >= MISSED_SHARE * typical
 
 
 def _near(frames: IntArray, others: IntArray, window: int) -> npt.NDArray[np.bool_]:

@@ -36,6 +36,7 @@ from analysis.dtw import DTWOptions
 from analysis.kinematics import positions
 from analysis.kinematics import quaternions as quat
 from analysis.kinematics.forward_kinematics import UP_AXIS
+from analysis.live.frame_kernels import MIRROR_Q, FeatureLayout, FrameStore
 from analysis.live.judged import RepetitionJudge, guidance_events
 from analysis.live.words import Event, repetition_words
 from analysis.online.aligners import ForwardPlotAligner, ForwardPlotOptions, OpenEndAligner
@@ -56,8 +57,6 @@ from analysis.pipeline.results import Guidance
 
 FloatArray = npt.NDArray[np.float64]
 IndexArray = npt.NDArray[np.intp]
-MIRROR_Q = np.array([1.0, 1.0, -1.0, -1.0])  # (w, x, y, z) reflected in the lateral (x) axis
-MIRROR_X = np.array([-1.0, 1.0, 1.0])  # a position reflected in the lateral (x) axis
 
 
 class _StreamRows(NamedTuple):
@@ -116,24 +115,27 @@ class LiveAligner:
         self._place = self._playback = 0
         self._frame_of: list[int] = []  # model-rate frame -> stream frame
         self._progress: tuple[list[float], list[float]] = ([], [])  # as performed, mirrored
-        self._q: tuple[list[FloatArray], list[FloatArray]] = ([], [])
-        self._gesture_q: list[FloatArray] = []  # (J, 4) per model-rate frame, for guidance
-        self._gesture_mirror_q: list[FloatArray] = []  # their mirror image's joints
         gesture = np.asarray(model.components.papers.joint_index, dtype=np.intp)
         index, mirror, joints = self._index, self._mirror, self._joints
         self._rows = _StreamRows(
             index[joints], index[mirror[joints]], index[gesture], index[mirror[gesture]]
         )
+        kin, axis = self._kinematics, model.components.axis
+        layout = FeatureLayout(
+            kin.columns, kin.axes, kin.layout, kin.offsets, kin.parents, index, mirror,
+            np.ascontiguousarray(axis.start_pose, dtype=np.float64),
+            np.ascontiguousarray(axis.direction, dtype=np.float64), *self._rows,
+        )  # fmt: skip
+        self._axis_scale = float(axis.scale)
+        self._store = FrameStore(layout, len(model.joint_names))
         self._paces: list[Pace] = []  # the repetitions' so far (the patient's own pace)
         # repetitions are counted on the side the patient uses (mirror image: side 1)
         self._counter = RepetitionCounter(model.components.axis.rep_frames)
         self._side = 0
         self._span = [(np.inf, -np.inf), (np.inf, -np.inf)]  # least, most progress per side
         self._undo = np.eye(3)
-        self._points: list[FloatArray] = []
         self._heading: float | None = None
         self._scale = 1.0
-        self._last_pos: FloatArray | None = None
         self._tutor_pos: FloatArray | None = None
 
     # --- set-up -------------------------------------------------------------------------------
@@ -183,7 +185,7 @@ class LiveAligner:
             return []
         started, cpu = time.perf_counter(), time.thread_time()
         self._due += self._period
-        row = np.asarray(values, dtype=np.float64)
+        row = np.ascontiguousarray(values, dtype=np.float64)
         q = self._features(row)
         self._judge.add(row)
         self._frame_of.append(seq)
@@ -193,7 +195,7 @@ class LiveAligner:
         events = [self._repetition(c, self._side) for c in ended]
         if events:
             self._restart_playback()
-        self._place = self._oe.push(q[self._side])
+        self._place = self._oe.push_finite(q[self._side][None])
         self._playback = self._fp.push(q[self._side])
         ms = (time.perf_counter() - started) * 1000.0
         self.latencies_ms.append(ms)
@@ -236,12 +238,12 @@ class LiveAligner:
     def poses(self) -> tuple[FloatArray, FloatArray] | None:
         """World positions (J, 3) of the newest frame and of the tutor playback frame, in the
         model's joint order, each moved so that its root stands at x = z = 0 (for display)."""
-        if self._last_pos is None:
+        if self._store.t == 0:
             return None
         if self._tutor_pos is None:
             self._tutor_pos = positions(self.model.tutor)
         tutor = self._tutor_pos[self.tutor_start + self._playback]
-        return _grounded(self._last_pos), _grounded(tutor)
+        return _grounded(self._store.model_pos), _grounded(tutor)
 
     def _choose_side(self) -> bool:
         """As the offline pipeline: the mirror image when it moves 25 % more along the tutor's
@@ -258,34 +260,29 @@ class LiveAligner:
     def _features(self, values: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Quaternions of the aligned joints (flat) as performed and mirrored; appends the
         progress along the tutor's axis of both."""
-        rot = self._kinematics.rotations(values[None])
-        pos = self._kinematics.positions(values[None])[0]
-        self._last_pos = model_pos = pos[self._index]
         if self._heading is None:
-            self._heading = float(quat.twist_angle(rot[0, :1], "XYZ"[UP_AXIS])[0])
-            child = np.flatnonzero(self._parents >= 0)
-            bones = np.linalg.norm(pos[child] - pos[self._parents[child]], axis=-1).sum()
-            self._scale = float(bones) if bones > 1e-9 else 1.0
-            undo = quat.from_axis_angle("XYZ"[UP_AXIS], -self._heading)
-            # rows are the turned unit vectors, so turning row vectors p is p @ self._undo
-            self._undo = quat.rotate(undo, np.eye(3)) / self._scale
-        points = (model_pos - pos[0]) @ self._undo
-        self._points.append(points)
-        parts = self.model.components
-        # as performed and as `mirrored` (left and right swap, x turns), one row each
-        sides = np.stack((points, points[self._mirror] * MIRROR_X)).reshape(2, -1)
-        for side, value in enumerate(parts.axis.progress(sides).tolist()):
+            self._face(values)
+        # positions facing the first frame's heading, as performed and as `mirrored` (left and
+        # right swap, x turns), their progress, the rotations compared (and those offline
+        # guidance aligns, as performed whichever side is used): one compiled call
+        t, store = self._store.t, self._store
+        for side, value in enumerate(store.add(values, self._undo, self._axis_scale)):
             self._progress[side].append(value)
             low, high = self._span[side]
             self._span[side] = (min(low, value), max(high, value))
-        row = rot[0]
-        # the rotations offline guidance aligns: as performed, whichever side is used
-        self._gesture_q.append(row[self._rows.gesture])
-        self._gesture_mirror_q.append(row[self._rows.gesture_mirror])
-        direct, flipped = (q[0] for q in self._joint_quaternions(rot))
-        self._q[0].append(direct)
-        self._q[1].append(flipped)
-        return direct, flipped
+        return store.q[0, t], store.q[1, t]
+
+    def _face(self, values: FloatArray) -> None:
+        """From the first frame: the turn that faces its heading, over the body's size."""
+        rot = self._kinematics.rotations(values[None])
+        pos = self._kinematics.positions(values[None])[0]
+        self._heading = float(quat.twist_angle(rot[0, :1], "XYZ"[UP_AXIS])[0])
+        child = np.flatnonzero(self._parents >= 0)
+        bones = np.linalg.norm(pos[child] - pos[self._parents[child]], axis=-1).sum()
+        self._scale = float(bones) if bones > 1e-9 else 1.0
+        undo = quat.from_axis_angle("XYZ"[UP_AXIS], -self._heading)
+        # rows are the turned unit vectors, so turning row vectors p is p @ self._undo
+        self._undo = np.ascontiguousarray(quat.rotate(undo, np.eye(3)) / self._scale)
 
     def _joint_quaternions(self, rot: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(F, d) quaternion features of the aligned joints from (F, J, 4) stream rotations, as
@@ -319,7 +316,7 @@ class LiveAligner:
         reach = float(progress.max() - progress[0])
         start, end = self._frame_of[a], self._frame_of[b]
         tempo = (b - a + 1) / self._reference_frames  # as offline: the tutor's median repetition
-        user = np.asarray(self._q[side][a : b + 1])
+        user = self._store.q[side, a : b + 1].copy()
         gesture = _gesture(self._tutor_q, user, user, index=len(self.repetitions), a0=0, u0=a,
                            opt=self._gb)  # fmt: skip
         score = round(self._judge.score(a, b, bool(side), self._index), 2)
@@ -357,9 +354,9 @@ class LiveAligner:
         papers, step = parts.papers, parts.scoring_step
         reps = parts.tutor_reps or [(self.tutor_start, self.tutor_end)]
         t0, t1 = reps[index % len(reps)]  # offline's choice when no key pose pairs them
-        patient_q = np.asarray(self._gesture_q[a : b + 1 : step])
+        patient_q = self._store.gesture[0, a : b + 1 : step].copy()
         aligned = align_gesture(papers.tutor_q[t0 : t1 + 1 : step], patient_q, papers.joint_weights)
-        mirror_q = np.asarray(self._gesture_mirror_q[a : b + 1 : step])
+        mirror_q = self._store.gesture[1, a : b + 1 : step].copy()
         tempo = (b - a + 1) / self._reference_frames
         pace, series = repetition_pace(patient_q, mirror_q, self._reference, tempo)
         self._paces.append(pace)

@@ -10,11 +10,15 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
+from analysis.assessment.compensations import checked, raw_series
 from analysis.bvh import Motion, Skeleton
-from analysis.clinical import angle_ranges, measure
-from analysis.clinical.body import find_body
-from analysis.kinematics import scaled_positions
-from analysis.online.frames import FrameKinematics
+from analysis.clinical import angle_ranges
+from analysis.clinical.angles import angles_of
+from analysis.clinical.body import Geometry, find_body, geometry, take_vertical
+from analysis.clinical.measured import within_limits
+from analysis.kinematics import kinematics
+from analysis.kinematics.forward_kinematics import heading_facing
+from analysis.kinematics.posefeatures import body_scale
 from analysis.pipeline.advice_stage import facts_of, judge_of, repetition_measures
 from analysis.pipeline.clinical_stage import rounded
 from analysis.pipeline.gestures import Pace
@@ -23,30 +27,137 @@ from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import mirrored
 from analysis.pipeline.results import Guidance, RepetitionResult
 from analysis.pipeline.stages import scoring_features
-from analysis.pipeline.tutor_parts import compensations
 
 FloatArray = npt.NDArray[np.float64]
 
 
+class _Rows:
+    """Arrays growing by rows (frames), with room doubled as needed: the frames so far are a
+    view, never a copy of the whole session."""
+
+    def __init__(self) -> None:
+        self.n = 0
+        self._arrays: dict[str, FloatArray] = {}
+
+    def extend(self, **rows: FloatArray) -> None:
+        """Append the same number of rows to each named array (none: nothing to keep)."""
+        if not rows:
+            return
+        k = len(next(iter(rows.values())))
+        for name, part in rows.items():
+            held = self._arrays.get(name)
+            if held is None or held.shape[0] < self.n + k:
+                grown = np.empty((max(2 * self.n + k, 64), *part.shape[1:]), dtype=np.float64)
+                if held is not None:
+                    grown[: self.n] = held[: self.n]
+                self._arrays[name] = held = grown
+            held[self.n : self.n + k] = part
+        self.n += k
+
+    def __getitem__(self, name: str) -> FloatArray:
+        return self._arrays[name][: self.n]
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._arrays
+
+    @property
+    def names(self) -> list[str]:
+        """The arrays' names, in the order first extended."""
+        return list(self._arrays)
+
+
 class RepetitionJudge:
     """Judges the repetitions of one stream: frames are the stream's BVH channel values at the
-    model's rate (`add`), a repetition is model-rate frames a..b (`judge`)."""
+    model's rate (`add`), a repetition is model-rate frames a..b (`judge`).
+
+    The offline analysis measures a whole recording, and some of its measures are statistics of
+    every frame (the mean heading and median body size the score is taken over, the share of
+    frames beyond the body's limits that leaves a clinical angle out, the ankle's zero from the
+    standing frames, the take's vertical). Each frame's forward kinematics, trunk frames, limb
+    axes and compensations as read are computed once, at the first repetition's end after it
+    (`_caught_up`), and only the whole-recording steps run over the frames so far: the same
+    numbers, to the last bit, as measuring every frame again (`tests/live/test_repetition_end`),
+    since each of those per-frame steps gives a frame the same values whatever frames are
+    computed with it. The clinical angles themselves (`angles_of`) are still read over every
+    frame so far: the ankle's zero and a shoulder angle's share of defined frames are taken
+    inside that reading."""
 
     def __init__(self, model: FittedModel, skeleton: Skeleton, mirrored: bool = False) -> None:
         self.model, self.skeleton = model, skeleton
         self._judge = judge_of(model, mirrored)
-        self._kinematics = FrameKinematics(skeleton)
         self._body = find_body(skeleton)
-        self._values: list[FloatArray] = []
+        self._frames = _Rows()  # channel values
+        self._kin = _Rows()  # world positions and the heading, of the frames done
+        self._geo = _Rows()  # `Geometry`'s trunk frames and limb axes, of the frames done
+        self._bent = _Rows()  # the compensations as read (`raw_series`), of the frames done
+        self._bent_up: FloatArray | None = None  # the vertical they were read about
+        self._frame_time = 1.0 / model.fps
+        self._rest_axes: dict[str, FloatArray] = {}  # `geometry`'s limb axes in the rest pose
 
     def add(self, values: FloatArray) -> None:
         """One model-rate frame's channel values."""
-        self._values.append(values)
+        self._frames.extend(values=np.asarray(values, dtype=np.float64)[None])
 
     def set_side(self, mirrored: bool) -> None:
         """The patient uses the other side (mirror image) from now on."""
         if mirrored != self._judge.mirrored:
             self._judge = judge_of(self.model, mirrored)
+
+    def _motion(self, b: int) -> Motion:
+        """Frames 0..b."""
+        return Motion(self.skeleton, self._frames["values"][: b + 1], self._frame_time)
+
+    def _caught_up(self, b: int) -> FloatArray:
+        """The world positions (b + 1, J, 3) of frames 0..b, computing the kinematics of only
+        the frames not yet done (and their trunk frames and limb axes, which read no other
+        frame); the rotations are not kept, for a long session's memory."""
+        done = self._kin.n
+        if done <= b:
+            motion = self._motion(b).with_frames(self._frames["values"][done : b + 1])
+            new = kinematics(motion)
+            self._kin.extend(positions=new.positions, heading=new.heading)
+            geo = geometry(motion, kin=new, body=self._body)
+            trunk = {"pelvis": geo.pelvis, "thorax": geo.thorax}
+            self._geo.extend(
+                **{k: v for k, v in trunk.items() if v is not None},
+                **{f"axis {k}": v for k, v in geo.axes.items()},
+            )
+            self._rest_axes = geo.rest_axes
+        return self._kin["positions"][: b + 1]
+
+    def _vertical(self, positions: FloatArray) -> FloatArray:
+        """The take's vertical, as `geometry` and `tutor_parts.compensations` find it: the
+        rig's, or for a rig whose rest pose does not stand, the trunk's over frames so far."""
+        return self._body.up if self._body.upright else take_vertical(positions, self._body)
+
+    def _angles(self, positions: FloatArray, b: int) -> dict[str, FloatArray]:
+        """`measure(...).series` of frames 0..b: the clinical angles of the geometry done, with
+        the take's vertical and the whole-take steps (the ankle's zero, the share of frames
+        defined, beyond the body's limits or noisy) over every frame so far."""
+        parts = {k: self._geo[k][: b + 1] for k in ("pelvis", "thorax") if k in self._geo}
+        axes = {k[5:]: self._geo[k][: b + 1] for k in self._geo.names if k.startswith("axis ")}
+        geo = Geometry(
+            parts.get("pelvis"), parts.get("thorax"), axes, self._rest_axes,
+            self._vertical(positions), self._body.upright,
+        )  # fmt: skip
+        return within_limits(angles_of(geo)).series
+
+    def _compensations(self, positions: FloatArray, b: int) -> dict[str, FloatArray]:
+        """`tutor_parts.compensations` of frames 0..b: each frame read once about the take's
+        vertical (again from the first frame should that vertical change), each measure then
+        checked over every frame so far (`compensation_measures`)."""
+        up = self._vertical(positions)
+        if self._bent_up is None or not np.array_equal(up, self._bent_up):
+            self._bent, self._bent_up = _Rows(), up
+        done = self._bent.n
+        if done <= b and (read := raw_series(positions[done : b + 1], self._body.joints, up)):
+            self._bent.extend(**read)
+        series = {}
+        for name in self._bent.names:
+            kept, _ = checked(name, self._bent[name][: b + 1])
+            if kept is not None:
+                series[name] = kept
+        return series
 
     def score(
         self, a: int, b: int, mirror_image: bool, index: Sequence[int] | npt.NDArray[np.intp]
@@ -55,13 +166,15 @@ class RepetitionJudge:
         it (`stages.scoring_features`) from the frames so far: their positions facing their mean
         heading over their median body size; scored as the tutor's side for the mirror image;
         ``index``: the stream's joint of each of the model's."""
-        frames = np.asarray(self._values[: b + 1], dtype=np.float64)
-        motion = Motion(self.skeleton, frames, 1.0 / self.model.fps)
-        points = scaled_positions(motion, list(index))
+        positions = self._caught_up(b)
+        # `scaled_positions` of frames 0..b, gathered for the repetition's frames alone
+        points = heading_facing(positions, self._kin["heading"][: b + 1])
+        scale = body_scale(points, self.skeleton.parents)
+        points = np.take(points[a : b + 1], list(index), axis=1) / scale
         parts = self.model.components
         if mirror_image:
             points = mirrored(points, parts.mirror)
-        return float(parts.scorer.score(scoring_features(points, a, b, parts)))
+        return float(parts.scorer.score(scoring_features(points, 0, b - a, parts)))
 
     def judge(  # noqa: PLR0917 (a repetition's live measurements)
         self,
@@ -79,10 +192,9 @@ class RepetitionJudge:
         repetition); ``own``: the patient's usual pace from an earlier session."""
         # measured over every frame so far, as the offline analysis measures a whole recording
         # (a measure it leaves out as beyond the body or too noisy is judged on the take)
-        frames = np.asarray(self._values[: b + 1], dtype=np.float64)
-        motion = Motion(self.skeleton, frames, 1.0 / self.model.fps)
-        series = measure(motion).series
-        bent = compensations(self._kinematics.positions(frames), self._body)
+        positions = self._caught_up(b)
+        series = self._angles(positions, b)
+        bent = self._compensations(positions, b)
         rep = RepetitionResult(
             start=a, end=b, peak=a, score=score, reach=reach, tempo=tempo,
             guidance=tuple(guidance), clinical_angles=rounded(angle_ranges(series, a, b)),

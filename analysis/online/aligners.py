@@ -26,7 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Literal
 
-import numba as nb
 import numpy as np
 import numpy.typing as npt
 
@@ -39,9 +38,17 @@ from analysis.dtw import (
 )
 from analysis.dtw import kernels as kern
 from analysis.kinematics import quaternions as quat
+from analysis.online.step_kernels import (
+    BIG,
+    _forward_c,
+    _open_end_row,
+    _spin_forward,
+    method_b_step,
+    reverse_accumulate,
+)
 
 FloatArray = npt.NDArray[np.float64]
-_BIG = 1e4  # the "very high value" 003 gives to cells the constraint forbids
+IntArray = npt.NDArray[np.int64]
 
 
 class OpenEndAligner:
@@ -62,6 +69,8 @@ class OpenEndAligner:
             self.reference[:1], self.reference, self.options.cost, self.options.weights
         )
         self._typev = self.options.step == "type-v"
+        self._open_begin = bool(self.options.open_begin)
+        self._plw = bool(self.options.path_length_weighting)
         self._D = np.full((2, 3, m) if self._typev else (2, m), np.inf)
         self._L = np.ones((2, m))
         self._crow = np.empty((1, m))
@@ -86,21 +95,27 @@ class OpenEndAligner:
 
     def push(self, frame: npt.ArrayLike) -> int:
         """Add the newest query frame (d,); return the reference frame it matches (open end)."""
+        return self.push_finite(as_frames(np.ravel(frame)[None, :], "frame"))
+
+    def push_finite(self, x: FloatArray) -> int:
+        """`push` for a frame already checked: a C-contiguous float64 (1, d) array of finite
+        values (a live session's features are; the checks cost more than the row)."""
         t, m = self.t, self.reference.shape[0]
         if t >= self._lo.size:
             self._grow(2 * self._lo.size)
         w = self.options.window
         self._lo[t] = 0 if w is None else min(max(0, t - w), m)
         self._hi[t] = m - 1 if w is None else min(m - 1, t + w)
-        ci = self._ci.with_query(as_frames(np.ravel(frame)[None, :], "frame"))
-        cost_rows(ci.mode, ci.x, ci.yt, ci.wj, -t, t, t + 1, self._lo, self._hi, self._crow)
-        head = (self._crow, t, t + 1, self._lo, self._hi, bool(self.options.open_begin))
-        tail = (self._dirs, self._keep, self._full, False, self._omega, True)
+        ci = self._ci
         if self._typev:
+            cost_rows(ci.mode, x, ci.yt, ci.wj, -t, t, t + 1, self._lo, self._hi, self._crow)
+            head = (self._crow, t, t + 1, self._lo, self._hi, bool(self.options.open_begin))
+            tail = (self._dirs, self._keep, self._full, False, self._omega, True)
             kern.rows_typev(*head, self._D, *tail)
         else:
-            plw = bool(self.options.path_length_weighting)
-            kern.rows_symmetric(*head, plw, self._D, self._L, *tail)
+            _open_end_row(ci.mode, x, ci.yt, ci.wj, t, self._lo, self._hi, self._crow,
+                          self._open_begin, self._plw, self._D, self._L, self._dirs, self._keep,
+                          self._full, self._omega)  # fmt: skip
         self.t += 1
         j = int(self._omega[t])
         # An exhausted Type V band has no admissible cell any more: stay at the reference's end.
@@ -160,6 +175,7 @@ class ForwardPlotOptions:
 
 _TYPE_V_STEPS = {"A": (0, 1, 2, 3), "B": (0, 1), "C": (1,)}
 _TYPE_V_REPEAT = {"A": "B", "B": "C"}
+_STEP_ARRAYS = {state: np.array(steps, np.int64) for state, steps in _TYPE_V_STEPS.items()}
 
 
 class TypeV:
@@ -212,111 +228,6 @@ def forecast_reference(recent: FloatArray, steps: int) -> FloatArray:
     return quat.multiply(steps_q, q1[None]).reshape(steps, -1)
 
 
-@nb.njit(cache=True, nogil=True)
-def _spin_forward(q0: FloatArray, q1: FloatArray, s: float, steps: int) -> FloatArray:
-    """Per joint: the mean angular step w from q0 to q1 over s frames, then exp(k w) q1 for
-    k = 1..steps: (steps, J, 4). A single frame is too little work for numpy's overheads."""
-    J = q1.shape[0]
-    out = np.empty((steps, J, 4))
-    for j in range(J):
-        aw, ax, ay, az = q1[j, 0], q1[j, 1], q1[j, 2], q1[j, 3]
-        bw, bx, by, bz = q0[j, 0], q0[j, 1], q0[j, 2], q0[j, 3]
-        if aw * bw + ax * bx + ay * by + az * bz < 0.0:  # the same hemisphere as q1
-            bw, bx, by, bz = -bw, -bx, -by, -bz
-        # r = q1 * conj(q0)
-        rw = aw * bw + ax * bx + ay * by + az * bz
-        rx = -aw * bx + ax * bw - ay * bz + az * by
-        ry = -aw * by + ax * bz + ay * bw - az * bx
-        rz = -aw * bz - ax * by + ay * bx + az * bw
-        if rw < 0.0:
-            rw, rx, ry, rz = -rw, -rx, -ry, -rz
-        norm_v = np.sqrt(rx * rx + ry * ry + rz * rz)
-        near = norm_v < 1e-12  # the rotation vector's length over norm_v, safely
-        scale = 2.0 / max(rw, 1e-300) if near else 2.0 * np.arctan2(norm_v, rw) / norm_v
-        wx, wy, wz = rx * scale / s, ry * scale / s, rz * scale / s
-        for k in range(steps):
-            vx, vy, vz = (k + 1) * wx, (k + 1) * wy, (k + 1) * wz
-            angle = np.sqrt(vx * vx + vy * vy + vz * vz)
-            half = 0.5 * angle
-            f = np.sin(half) / angle if angle > 1e-12 else 0.5
-            cw, cx, cy, cz = np.cos(half), f * vx, f * vy, f * vz
-            out[k, j, 0] = cw * aw - cx * ax - cy * ay - cz * az
-            out[k, j, 1] = cw * ax + cx * aw + cy * az - cz * ay
-            out[k, j, 2] = cw * ay - cx * az + cy * aw + cz * ax
-            out[k, j, 3] = cw * az + cx * ay - cy * ax + cz * aw
-    return out
-
-
-@nb.njit(cache=True, nogil=True)
-def reverse_accumulate(C: FloatArray, plw: bool) -> FloatArray:
-    """Method C's accumulated cost (003 Algorithm 9) with a free end in the last column.
-
-    D[i, w-1] = C[i, w-1];  D[i, j] = C[i, j] + min(D[i+1, j+1], D[i+1, j], D[i, j+1]).
-    Rows are reference frames, columns the newest query frame then its forecast. With ``plw`` the
-    successor is chosen by mean cost (paper 000 eq 3, run backwards) and D / L is returned: plain
-    sums favour starting far ahead, where fewer cells are needed, so C would skip frames.
-    """
-    R, W = C.shape
-    D, L = np.empty((R, W)), np.ones((R, W))
-    for i in range(R):
-        D[i, W - 1] = C[i, W - 1]
-    for j in range(W - 2, -1, -1):
-        for i in range(R - 1, -1, -1):
-            c = C[i, j]
-            bd, bl = D[i, j + 1], L[i, j + 1]
-            bs = (bd + c) / (bl + 1.0) if plw else bd
-            if i + 1 < R:
-                for d, le in ((D[i + 1, j + 1], L[i + 1, j + 1]), (D[i + 1, j], L[i + 1, j])):
-                    s = (d + c) / (le + 1.0) if plw else d
-                    if s < bs:
-                        bs, bd, bl = s, d, le
-            D[i, j] = c + bd
-            L[i, j] = bl + 1.0
-    return D / L if plw else D
-
-
-@nb.njit(cache=True, nogil=True)
-def _forward_accumulate(C: FloatArray) -> FloatArray:
-    """Standard DTW accumulation from (0, 0) (003 Algorithm 2)."""
-    R, W = C.shape
-    D = np.empty((R, W))
-    for i in range(R):
-        for j in range(W):
-            best = 0.0 if i == 0 and j == 0 else np.inf
-            if i > 0 and j > 0:
-                best = D[i - 1, j - 1]
-            if i > 0:
-                best = min(best, D[i - 1, j])
-            if j > 0:
-                best = min(best, D[i, j - 1])
-            D[i, j] = C[i, j] + best
-    return D
-
-
-@nb.njit(cache=True, nogil=True)
-def method_b_step(C: FloatArray) -> int:
-    """Method B (003 Algorithms 5, 7): forward DTW, (0, 0) made expensive, walk back from the far
-    corner; return the lowest reference row the path visits in column 1 (the newest frame)."""
-    D = _forward_accumulate(C)
-    D[0, 0] = _BIG  # forces the walk through (0, 1) or (1, 0): the newest frame may repeat
-    i, j = C.shape[0] - 1, C.shape[1] - 1
-    row = i
-    while i > 0 or j > 0:
-        if j == 1:
-            row = i
-        if j == 0 or i == 0:
-            i, j = max(i - 1, 0), j if i > 0 else j - 1
-            continue
-        a, b, c = D[i - 1, j - 1], D[i - 1, j], D[i, j - 1]
-        if b < a and b <= c:
-            i -= 1
-        elif c < a and c < b:
-            j -= 1
-        else:
-            i, j = i - 1, j - 1
-    return row if C.shape[1] > 1 else 0
-
-
 class ForwardPlotAligner:
     """Forward-plotting on-line alignment (003 methods A, B, C): ``push(frame) -> reference index``.
 
@@ -339,6 +250,11 @@ class ForwardPlotAligner:
         self.type_v = TypeV() if self.dtw.step == "type-v" else None
         self.history: list[FloatArray] = []
         self.mapping: list[int] = []
+        # method C on rotations: one compiled call a frame, over scratch made once
+        self._compiled_c = self.options.method == "C" and is_quaternion_kind(self.dtw.cost)
+        self._plw = bool(self.dtw.path_length_weighting)
+        self._every_step = np.arange(self.options.window + 1, dtype=np.int64)
+        self._scratch = np.empty((self.options.window, self.reference.shape[0]))
 
     def _allowed(self, span: int) -> list[int]:
         steps = self.type_v.allowed() if self.type_v else tuple(range(span + 1))
@@ -381,6 +297,17 @@ class ForwardPlotAligner:
             c = self._costs(M, span, self.history[-1][None])[:, 0]
             return allowed[int(np.argmin(c[allowed]))]
         span = min(opt.window, m - 1 - M)
+        if self._compiled_c:  # the same steps as below, in one compiled call
+            q0, q1 = self.history[0], self.history[-1]
+            if q1.size != self.reference.shape[1]:
+                raise ValueError("the frames and the reference differ in features per frame")
+            steps = _STEP_ARRAYS[self.type_v.state] if self.type_v else self._every_step
+            k = _forward_c(self._inputs.mode, q0, q1, float(len(self.history) - 1),
+                           opt.window - 1, self._inputs.yt, self._inputs.wj, M, span, self._plw,
+                           steps, self._scratch)  # fmt: skip
+            if k < 0:
+                raise ValueError("frames contains NaN or infinite values")
+            return k
         allowed = self._allowed(span)
         ahead = forecast(
             np.array(self.history), opt.window - (1 if opt.method == "C" else 2), self.dtw.cost
@@ -393,6 +320,6 @@ class ForwardPlotAligner:
             return allowed[int(np.argmin(D[allowed, 0]))]
         C = self._costs(M, span, np.vstack([self.history[-2], self.history[-1], ahead]))
         forbidden = np.setdiff1d(np.arange(span + 1), allowed)
-        C[forbidden, 1] = _BIG
+        C[forbidden, 1] = BIG
         row = method_b_step(C)
         return min(allowed, key=lambda k: (abs(k - row), k))

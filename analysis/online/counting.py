@@ -41,6 +41,7 @@ from analysis.landmarks.segmentation import (
     middle_of_rest,
 )
 from analysis.landmarks.segmentation import RELATIVE_PROMINENCE as RELATIVE
+from analysis.online.peaks import percentile, prominent_peaks
 
 FloatArray = npt.NDArray[np.float64]
 HISTORY_REPS = 3.0  # repetitions of cleaned signal searched for peaks (older ones are counted)
@@ -163,7 +164,7 @@ class RepetitionCounter:
     def _rest_level(self) -> float:
         """The 5th percentile of the cleaned signal so far (updated every few frames)."""
         if self._rest is None or self.clean.size % 8 == 0:
-            self._rest = float(np.percentile(self.clean.values, REST_PERCENTILE))
+            self._rest = percentile(self.clean.values, REST_PERCENTILE)
         return self._rest
 
     def _step(self, final: bool) -> list[Counted]:
@@ -192,9 +193,8 @@ class RepetitionCounter:
         window = self.clean.values[lo:] - rest
         pad, floor = self._pad, min(self._low - rest, 0.0)
         left, right = (pad if lo == 0 else 0), (pad if final else 0)
-        padded = np.pad(window, (left, right), mode="constant", constant_values=floor)
-        peaks, props = find_peaks(padded, distance=self._distance, prominence=MIN_PROMINENCE)
-        for p, prominence in zip(peaks.tolist(), props["prominences"].tolist(), strict=True):
+        peaks, prominences = prominent_peaks(window, left, right, floor, self._distance)
+        for p, prominence in zip(peaks, prominences, strict=True):
             frame = min(max(lo + p - left, 1), max(n - 2, 1))
             h = float(self.clean.values[frame] - rest)
             if frame <= after or prominence < RELATIVE * max(h, 1e-9) or h < MIN_PROMINENCE:

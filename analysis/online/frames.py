@@ -22,17 +22,17 @@ class FrameKinematics:
     def __init__(self, skeleton: Skeleton) -> None:
         if np.any(skeleton.parents >= np.arange(len(skeleton.names))):
             raise ValueError("every joint's parent must come before it")
-        columns, axes = fk._rotation_layout(skeleton)
-        self._columns, self._axes = columns, axes
-        self._layout = np.hstack([columns, axes, fk._translation_columns(skeleton)])
-        self._offsets = np.ascontiguousarray(skeleton.offsets, dtype=np.float64)
-        self._parents = skeleton.parents
+        # the skeleton's layout for the compiled kernels (a live session's kernel takes them)
+        self.columns, self.axes = fk._rotation_layout(skeleton)
+        self.layout = np.hstack([self.columns, self.axes, fk._translation_columns(skeleton)])
+        self.offsets = np.ascontiguousarray(skeleton.offsets, dtype=np.float64)
+        self.parents = np.ascontiguousarray(skeleton.parents, dtype=np.int64)
 
     def rotations(self, frames: FloatArray) -> FloatArray:
         """(F, J, 4) local rotations of (F, C) channel values."""
-        return fk._euler_quaternions(np.ascontiguousarray(frames), self._columns, self._axes)
+        return fk._euler_quaternions(np.ascontiguousarray(frames), self.columns, self.axes)
 
     def positions(self, frames: FloatArray) -> FloatArray:
         """(F, J, 3) world positions of (F, C) channel values."""
         data = np.ascontiguousarray(frames, dtype=np.float64)
-        return fk._positions_only(data, self._layout, self._offsets, self._parents)
+        return fk._positions_only(data, self.layout, self.offsets, self.parents)

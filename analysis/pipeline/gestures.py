@@ -7,10 +7,10 @@ Along that warping path (tutor frames i, patient frames j), paper 001's Table 1:
 
 - *too fast* / *too slow* (`Pace.tempo`): the repetition's duration over the reference's (the
   median of the tutor's repetitions), judged twice: against the reference (`GuidanceRules`
-  ``reference``: far from the tutor's pace whoever the patient is; wider once an earlier
-  session is known) and against the patient's own pace (``own``: ratios to the patient's usual
-  tempo: the median of an earlier session's repetitions when known, else of this session's
-  repetitions so far). The
+  ``reference``: far from the tutor's pace whoever the patient is; ``known_reference``, wider,
+  once an earlier session is known) and against the patient's own pace (ratios to the patient's
+  usual tempo: the median of an earlier session's repetitions when known, ``own``, else of
+  this session's repetitions so far, ``so_far``). The
   frames: the many-to-one runs of the warping path (several tutor frames on one patient frame:
   fast; one tutor frame held over several patient frames: slow).
 - *incomplete* / *overdone* (`Pace.reach`): the angular excursion of the involved joints (each
@@ -51,19 +51,26 @@ TAU_PAIRS = 96
 
 @dataclass(frozen=True)
 class GuidanceRules:
-    """When a repetition gets each kind of guidance. Bands (too fast below, too slow above,
-    incomplete below, overdone above) on the ratios to the reference's tempo and reach:
-    ``reference`` in a first session, and for tempo always; for reach, the wider
-    ``known_reference`` once an earlier session's pace is known (that pace then says what is
-    usual for this patient); ``own``: on the ratios to the patient's usual pace (`Pace`). The
-    tempo band: on UI-PRMD's development subjects, correct takes last 0.6–2.0 times the tutor's
-    repetition (median 1.19), so no band both names every ×0.6 / ×1.6 take and leaves every
-    unmodified one alone; 0.85 / 1.55 names about 84 % / 82 % of them and leaves 86 % of
-    unmodified repetitions (docs/EVALUATION.md, "One judgement per repetition")."""
+    """When a repetition gets each kind of guidance: bands (too fast below, too slow above,
+    incomplete below, overdone above) on the ratios to the reference's tempo and reach
+    (``reference`` in a first session, ``known_reference`` once an earlier session's pace says
+    what is usual for this patient) and on the ratios to the patient's usual pace (``own`` for an
+    earlier session's, ``so_far`` for this session's repetitions so far).
 
-    reference: tuple[float, float, float, float] = (0.85, 1.55, 0.55, 1.6)
-    known_reference: tuple[float, float, float, float] = (0.4, 3.0, 0.3, 3.0)
+    Why these figures (docs/EVALUATION.md, "Guidance (paper 001, Table 1)"): on UI-PRMD's
+    development subjects, correct takes last 0.88–1.43 times the tutor's repetition and reach
+    0.57–1.06 of its excursion (10th–90th percentile of the takes' medians), about as far apart
+    as a whole take re-timed ×0.6 / ×1.6 or scaled ×0.6 / ×1.3, so in a first session no band
+    names every mistake and leaves every correct take alone: 0.86 / 1.5 and 0.55 / 1.2 trade the
+    two. Once an earlier session is known, the patient's own pace names the change and the
+    reference's tempo band only keeps a 1.6× change (either way) from ever being hidden. The
+    bands against this session's repetitions so far are wider than an earlier session's: they
+    catch one repetition rushed or cut short among steady ones, not a take's natural spread."""
+
+    reference: tuple[float, float, float, float] = (0.86, 1.5, 0.55, 1.2)
+    known_reference: tuple[float, float, float, float] = (0.65, 1.55, 0.3, 3.0)
     own: tuple[float, float, float, float] = (0.75, 1.3, 0.7, 1.12)
+    so_far: tuple[float, float, float, float] = (0.65, 1.5, 0.55, 1.3)
     min_run: int = 2
 
 
@@ -202,16 +209,15 @@ def pace_guidance(pace: Pace, own: Pace | None, rules: GuidanceRules) -> list[tu
     pace (None: judged against the reference alone).
 
     Tempo (paper 001, issue 34): the repetition's duration over the reference's, against the
-    reference's band whether or not an earlier session is known (a 1.6× change is never hidden
-    by a patient's usual pace, which only softens the words: `usual_for_patient`); and against
-    the patient's usual tempo, in the direction away from the reference only (a repetition
-    slower than usual but quicker than the demonstration is not told to speed up). Reach against
-    both too, its reference band widened once an earlier session says what is usual for this
-    patient (both directions may apply: `analysis.pipeline.judgement` keeps one per axis)."""
+    reference's band whether or not an earlier session is known (once one is, the band still
+    names a 1.6× change either way: a patient's usual pace never hides it, it only softens the
+    words: `usual_for_patient`); and against the patient's usual tempo, in the direction away
+    from the reference only (a repetition slower than usual but quicker than the demonstration
+    is not told to speed up). Reach against both too (both directions may apply:
+    `analysis.pipeline.judgement` keeps one per axis). The bands: `GuidanceRules`."""
     mine = own or Pace(1.0, 1.0)
-    fast, slow = rules.reference[:2]
-    short, far = (rules.known_reference if mine.earlier else rules.reference)[2:]
-    own_fast, own_slow, own_short, own_far = rules.own
+    fast, slow, short, far = rules.known_reference if mine.earlier else rules.reference
+    own_fast, own_slow, own_short, own_far = rules.own if mine.earlier else rules.so_far
     tempo, reach = max(pace.tempo, 1e-9), max(pace.reach, 1e-3)
     my_tempo, my_reach = tempo / max(mine.tempo, 1e-9), reach / max(mine.reach, 1e-9)
     past = {

@@ -174,7 +174,7 @@ def fit_tutor_parts(
 
 def _features_or_none(tutor: Motion, kin: Kinematics) -> FloatArray:
     """The tutor's retrieval features; an empty (0, 0) array when its body parts cannot be found
-    (then `match.nearest_other` compares with no other exercise, as before)."""
+    (then `match.rank` compares with no other exercise, as before)."""
     try:
         return features_of(tutor, kin)
     except ValueError:

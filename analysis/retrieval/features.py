@@ -90,6 +90,32 @@ FEATURES: tuple[tuple[str, str, str], ...] = (
 N_FEATURES = len(FEATURES)
 
 
+def _mirrored_role(role: str) -> str:
+    side, _, part = role.partition("_")
+    return {"l": f"r_{part}", "r": f"l_{part}"}.get(side, role) if part else role
+
+
+def _mirror_order() -> tuple[int, ...]:
+    """Column k of a take's mirror image (left and right swapped) is column ``order[k]``."""
+    index = {(a, b): k for k, (_, a, b) in enumerate(FEATURES)}
+    order = []
+    for _, a, b in FEATURES:
+        pair = (_mirrored_role(a), _mirrored_role(b))
+        order.append(index.get(pair, index.get(pair[::-1], -1)))
+    if sorted(order) != list(range(N_FEATURES)):
+        raise AssertionError("every feature needs its mirror image among FEATURES")
+    return tuple(order)
+
+
+MIRROR_ORDER = _mirror_order()
+
+
+def mirrored_features(features: np.ndarray) -> np.ndarray:
+    """The (F, 17) features of the same take done with the other side: a lunge led with the
+    right leg reads as one led with the left (distances do not change sign when mirrored)."""
+    return np.asarray(features)[:, MIRROR_ORDER]
+
+
 def _candidates(role: str) -> list[str]:
     """Normalised names that may denote `role`, best first (side before or after the part)."""
     if "_" not in role:

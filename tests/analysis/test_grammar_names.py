@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from analysis.feedback import GrammarError, check_names, default_grammar
+from analysis.feedback.grammar import parse_rules, rename_joints
 
 GRAMMARS = Path(__file__).parent / "fixtures" / "grammars"
 ARM_JOINTS = ("LEFT_SHOULDER", "LEFT_ELBOW", "RIGHT_SHOULDER", "RIGHT_ELBOW")
@@ -69,3 +70,36 @@ def test_the_default_grammar_of_a_skeleton_passes():
 def test_a_syntax_error_is_still_reported_first():
     with pytest.raises(GrammarError, match="line 1"):
         check_names('type$2 & @banana$3 -> F:"unclosed\n', ARM_JOINTS, [1, 2])
+
+
+def test_earlier_spellings_are_understood_without_being_offered():
+    text = 'type$2 & @hips$3 -> F:"Level hips"\ntype$2 & @waist$2 -> F:"Stored earlier"\n'
+    assert len(check_names(text, ["hips", "lower_back"], [1, 2], also=["Waist"])) == 2
+    with pytest.raises(GrammarError) as refused:
+        check_names(text + '@tail$2 -> F:"x"\n', ["hips", "lower_back"], [1, 2], also=["Waist"])
+    assert refused.value.line == 3
+    assert refused.value.message.endswith("it knows hips, lower_back")
+
+
+def test_renaming_joints_changes_only_the_body_parts_of_conditions():
+    text = (
+        'type$2 & (@ hips$3 | @lower_back$2) -> F:"Keep @hips$3 # in the text"  # @hips$4\n'
+        '!@waist$2 -> T:"x"\n'
+    )
+    rig = {"hips": "Waist", "lower_back": "Spine"}
+    renamed = rename_joints(text, lambda joint: rig.get(joint, joint))
+    assert renamed == (
+        'type$2 & (@ Waist$3 | @Spine$2) -> F:"Keep @hips$3 # in the text"  # @hips$4\n'
+        '!@waist$2 -> T:"x"\n'
+    )
+    first, second = parse_rules(renamed)
+    assert (first.line, second.line) == (1, 2)  # the layout, so error lines, are kept
+
+
+def test_syntax_errors_speak_of_body_parts_as_the_page_does():
+    with pytest.raises(GrammarError) as unknown:
+        check_names('left_knee$3 -> F:"x"\n', ARM_JOINTS, [1, 2])
+    assert "@body_part$N for a body part" in unknown.value.message
+    with pytest.raises(GrammarError) as missing:
+        check_names('type$2 & @ -> F:"x"\n', ARM_JOINTS, [1, 2])
+    assert "a body part" in missing.value.message and "joint" not in missing.value.message

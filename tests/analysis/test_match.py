@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from analysis.bvh import read
@@ -14,10 +15,13 @@ from analysis.pipeline.match import (
     Evidence,
     MatchContext,
     MatchOptions,
+    Ranking,
     decide,
+    distances,
     features_of,
 )
 from analysis.pipeline.results import ExerciseMatch
+from analysis.retrieval.features import MIRROR_ORDER, mirrored_features
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "ui-prmd"
 
@@ -102,3 +106,40 @@ def test_runs_stored_before_the_check_read_as_fitting():
     old = AnalysisSummary.from_json({"frames": 10, "fps": 30.0, "score": 55.0})
     assert old.match == ExerciseMatch() and old.score == 55.0
     assert ExerciseMatch.from_json({"fits": False, "message": "m", "looks_like": None}).message
+
+
+def test_a_take_done_with_the_other_side_is_at_no_distance():
+    rng = np.random.default_rng(7)
+    take = rng.random((40, 17))
+    assert sorted(MIRROR_ORDER) == list(range(17))
+    assert np.array_equal(mirrored_features(mirrored_features(take)), take)
+    other_side = mirrored_features(take)
+    assert distances(other_side, [take, rng.random((40, 17))])[0] == pytest.approx(0.0)
+
+
+def test_the_named_exercises_are_those_the_distance_test_accepts():
+    a, b, c = (Candidate(k, k, np.zeros((1, 17))) for k in "abc")
+    ranking = Ranking(own=1.0, others=((0.5, a), (0.6, b), (0.9, c)))
+    assert ranking.nearer() == pytest.approx(2.0)
+    assert ranking.named(1.3) == (a, b)  # c is more than 1.3 times farther than a
+    assert ranking.named(1.1) == (a,)
+    assert Ranking(own=0.5, others=((0.6, a),)).named(1.3) == ()  # nothing nearer than own
+    match = decide(evidence(nearer=2.0, nearest=a, also=b), MatchContext("x"), MatchOptions())
+    assert not match.fits and match.looks_like == "a"
+    assert "It looks more like a or b." in match.message
+
+
+def test_one_rule_before_and_after_a_move(models):
+    """The clinic holds both exercises: an abduction analysed as the squat names the abduction;
+    moved there it fits; a squat moved to the abduction is told so again."""
+    squat = Candidate("squat-id", "a deep squat", features_of(models["m01"].tutor))
+    arms = Candidate("arms-id", "a shoulder abduction", features_of(models["m07"].tutor))
+    as_squat = MatchContext("a deep squat", (arms,))
+    as_arms = MatchContext("a shoulder abduction", (squat,))
+    abduction = session("m07_s04_incorrect")
+    before = analyse(abduction, models["m01"], match=as_squat).summary.match
+    assert not before.fits and before.looks_like == "arms-id"
+    assert analyse(abduction, models["m07"], match=as_arms).summary.match.fits
+    moved = analyse(session("m01_s03_incorrect"), models["m07"], match=as_arms).summary
+    assert not moved.match.fits and moved.match.looks_like == "squat-id"
+    assert moved.repetitions == () and moved.score is None

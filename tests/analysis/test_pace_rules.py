@@ -56,6 +56,9 @@ def test_a_usual_pace_softens_the_words_but_never_hides_a_change_from_the_refere
     assert kinds(Pace(1.6, 1.0), first) == ["too slow"]
     assert kinds(Pace(0.6, 1.0), first) == ["too fast"]
     assert kinds(Pace(1.6, 1.0), usual) == ["too slow"]
+    assert kinds(Pace(0.62, 1.0), Pace(0.62, 1.0, earlier=True)) == ["too fast"]
+    # within 1.6× of the reference, a patient's usual pace is not named again
+    assert kinds(Pace(1.45, 1.0), usual) == []
     assert usual_for_patient("too slow", usual, RULES)
     assert not usual_for_patient("too slow", Pace(1.0, 1.0, earlier=True), RULES)
     assert not usual_for_patient("too slow", replace(usual, earlier=False), RULES)
@@ -63,13 +66,34 @@ def test_a_usual_pace_softens_the_words_but_never_hides_a_change_from_the_refere
 
 def test_reach_against_the_reference_and_the_patients_own():
     assert kinds(Pace(1.0, 0.3)) == ["incomplete"]
-    assert kinds(Pace(1.0, 0.6), own=Pace(1.0, 1.0)) == ["incomplete"]
-    assert kinds(Pace(1.0, 1.3), own=Pace(1.0, 1.0)) == ["overdone"]
-    assert kinds(Pace(1.0, 0.6), own=Pace(1.0, 0.6)) == []
+    usual = Pace(1.0, 1.0, earlier=True)
+    assert kinds(Pace(1.0, 0.6), own=usual) == ["incomplete"]
+    assert kinds(Pace(1.0, 1.3), own=usual) == ["overdone"]
+    assert kinds(Pace(1.0, 0.6), own=Pace(1.0, 0.6, earlier=True)) == []
+
+
+def test_a_first_session_names_a_reach_past_the_reference():
+    """Issue 34: a correct take rarely reaches past 1.1 of the tutor's excursion, so a first
+    session's repetition reaching 1.3 of it is overdone (it was left alone below 1.6)."""
+    assert kinds(Pace(1.0, 1.3)) == ["overdone"]
+    assert kinds(Pace(1.0, 1.1)) == []
+
+
+def test_this_sessions_repetitions_so_far_name_only_a_clear_change():
+    """Against the repetitions so far (no earlier session), a repetition of a take's usual
+    spread gets nothing; one far quicker or shorter than its neighbours is named."""
+    so_far = Pace(1.45, 1.1)
+    assert kinds(Pace(1.3, 1.0), own=so_far) == []
+    # within the reference's bands, but 0.62 of the usual tempo / 0.53 of the usual reach
+    assert kinds(Pace(0.9, 1.0), own=so_far) == ["too fast"]
+    assert kinds(Pace(1.3, 0.58), own=so_far) == ["incomplete"]
+    # 0.64 of the usual reach: within a take's spread, not past an earlier session's band
+    assert kinds(Pace(1.3, 0.7), own=so_far) == []
+    assert kinds(Pace(1.3, 0.7), own=replace(so_far, earlier=True)) == ["incomplete"]
 
 
 def test_the_most_pressing_comes_first():
-    both = pace_guidance(Pace(0.5, 0.6), Pace(1.0, 1.0), RULES)
+    both = pace_guidance(Pace(0.5, 0.4), Pace(1.0, 1.0), RULES)
     assert [k for k, _ in both] == ["too fast", "incomplete"]
     assert both[0][1] > both[1][1] > 1.0
 

@@ -6,11 +6,14 @@ Chromium missing is an error, not a skip: run tests/e2e/ensure_programs.sh (CI d
 from __future__ import annotations
 
 import os
+import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
+
+from tests.local_server import LocalServer, made_once, prepared_folder
 
 CHROMIUM = Path(os.environ.get("CHROMIUM", "/usr/bin/chromium"))
 # Playwright's sync API keeps an event loop in this thread; the Django ORM calls made by the test
@@ -62,12 +65,53 @@ def eager_celery(settings, tmp_path):
     app.conf.task_always_eager = previous
 
 
+def demo_data() -> tuple[Path, Path]:
+    """What `load_demo` makes, made once per test run (tests/local_server.py): its rows as a
+    fixture file for `loaddata`, and its stored files."""
+    root = LocalServer.prepared_root
+    assert root is not None, "tests/conftest.py shares the prepared folders"
+    folder = prepared_folder(root, demo=True)
+    rows = made_once(
+        root / "demo.json",
+        lambda target: LocalServer(folder).manage(
+            "dumpdata", "--natural-foreign", "--exclude=contenttypes", "--exclude=auth.permission",
+            "--exclude=sessions", f"--output={target}",
+        ),
+    )  # fmt: skip
+    return rows, folder / "media"
+
+
 @pytest.fixture
 def demo(transactional_db, eager_celery, settings):
+    """The demo clinic, as `load_demo` leaves it, in this test's database and media folder.
+
+    `load_demo` analyses its recordings (tens of seconds); its result is loaded instead, the
+    same rows and files each time. Only the password hashes are made again, with this test's
+    fast hasher (the loader made them with the production one)."""
+    from django.contrib.contenttypes.models import ContentType
     from django.core.management import call_command
 
+    from webapp.accounts.models import User
+    from webapp.demo.clinic import DEMO_ACCOUNTS
+
     settings.DEMO_ALLOWED = True
-    call_command("load_demo")
+    rows, media = demo_data()
+    ContentType.objects.clear_cache()  # the rows name content types by their natural keys
+    call_command("loaddata", str(rows), verbosity=0)
+    shutil.copytree(media, settings.MEDIA_ROOT, dirs_exist_ok=True)
+    for username, password in DEMO_ACCOUNTS:
+        user = User.objects.get(username=username)
+        user.set_password(password)
+        user.save(update_fields=["password"])
+
+
+@pytest.fixture(scope="session")
+def demo_site(tmp_path_factory) -> Iterator[LocalServer]:
+    """One site with the demo clinic, started as `make run` starts it, for the whole run of an
+    xdist worker. For tests that only read its pages: a test that changes data uses `demo`
+    (live_server) or a LocalServer of its own."""
+    with LocalServer(tmp_path_factory.mktemp("demo-site"), demo=True) as server:
+        yield server
 
 
 def log_in(

@@ -63,7 +63,7 @@ def test_reference_plays_is_replaced_and_a_rule_is_picked(page, live_server, ana
 
     # Replace the reference through the page.
     old_frames = list(exercise.tutor_landmark_frames)
-    page.click("text=Replace the reference recording")
+    page.click("a.button:has-text('Replace the reference')")
     page.set_input_files("#id_tutor", str(NEW_REFERENCE))
     page.click("button[type=submit]")
     page.wait_for_url(f"{live_server.url}/exercises/{exercise.pk}/annotate/")

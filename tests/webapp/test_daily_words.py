@@ -10,11 +10,12 @@ import pytest
 from django.urls import reverse
 from django.utils import timezone
 
+from analysis.feedback import Grammar
 from tests.personas import PASSWORD, make_exercise
 from tests.webapp.test_does_not_fit import mismatched  # noqa: F401 (a fixture)
 from webapp.audit.models import AuditEvent
-from webapp.exercises.annotate import in_tick_words
 from webapp.patients.models import Prescription
+from workers import exercise_models
 
 
 @pytest.fixture
@@ -59,14 +60,39 @@ def test_the_audit_log_names_the_exercise_and_says_archive_and_bring_back(client
     assert sorted(actions) == ["archive", "restore"]
 
 
-def test_rule_errors_name_body_parts_as_the_ticks_do():
-    written = {"Waist": "waist", "Spine": "spine", "LeftThigh": "left_thigh"}
-    labels = {"Waist": "hips", "Spine": "lower back", "LeftThigh": "left thigh"}
-    message = "this exercise has no body part 'tail'; it knows left_thigh, spine, waist"
-    assert in_tick_words(message, written, labels) == (
-        "this exercise has no body part 'tail'; it knows left_thigh, spine (the lower back), "
-        "waist (the hips)"
+def test_rules_name_body_parts_as_the_ticks_do(client, world, exercise, monkeypatch):
+    client.force_login(world.therapist)
+    url = reverse("exercises:grammar", kwargs={"pk": exercise.pk})
+
+    def verdict(text: str) -> dict:
+        return client.post(url, {"text": text}, content_type="application/json").json()
+
+    ticks = 'type$2 & @hips$3 -> F:"Keep your hips level"\n@lower_back$2 -> T:"Stand tall"\n'
+    stored = 'type$2 & @waist$2 -> F:"Written before"\n@spine$4 -> F:"Also before"\n'
+    assert verdict(ticks)["valid"] and verdict(stored)["valid"]
+    refused = verdict('type$2 & @tail$3 -> F:"x"')
+    assert not refused["valid"] and (refused["line"], refused["column"]) == (1, 10)
+    known = refused["message"].split("it knows ")[1].split(", ")
+    assert {"hips", "lower_back", "left_thigh"} <= set(known)
+    assert not {"waist", "spine", "Waist", "Spine"} & set(known)
+    # The rule picker writes the ticks' words too.
+    rule = {"part": "Spine", "direction": "away", "degrees": "25", "moment": "2"}
+    rule.update(sentence="Keep your back still", said_as="F")
+    assert (
+        client.post(reverse("exercises:add-rule", kwargs={"pk": exercise.pk}), rule).status_code
+        == 302
     )
+    exercise.refresh_from_db()
+    assert "@lower_back$" in exercise.feedback_grammar
+    # The model is built with the rig's own names, which the analysis matches levels by.
+    built = {}
+    monkeypatch.setattr(exercise_models, "build_model", lambda tutor, **kw: built.update(kw))
+    exercise.feedback_grammar = ticks + stored
+    exercise_models.fit_for_exercise(exercise)
+    rules = Grammar.parse(built["grammar"])
+    assert rules.match(2, {"Waist": 3}).feedbacks == ("Keep your hips level",)
+    assert rules.match(1, {"Spine": 2}).tips == ("Stand tall",)
+    assert rules.match(2, {"Waist": 2}).feedbacks == ("Written before",)
 
 
 def test_the_patients_pages_speak_to_a_patient(client, world, exercise):

@@ -87,3 +87,23 @@ def assert_body_parts_ticked_and_described(client):
     page = client.get(f"/exercises/{abduction.pk}/").content.decode()
     assert "past shoulder height" in page and "to shoulder height and" not in page
     client.logout()
+
+
+@pytest.mark.django_db
+def test_a_published_demo_password_gets_the_full_work_factor_at_its_first_sign_in(settings):
+    """The loader hashes the published passwords with few rounds (seconds off `make run`); the
+    first sign-in hashes the password again with the site's own rounds."""
+    from django.contrib.auth.hashers import PBKDF2PasswordHasher
+
+    from webapp.accounts.models import Role
+    from webapp.demo.clinic import PUBLISHED_PASSWORD_ROUNDS, ensure_user
+
+    settings.PASSWORD_HASHERS = ["django.contrib.auth.hashers.PBKDF2PasswordHasher"]
+    clinic = Clinic.objects.create(name="Demo clinic")
+    user = ensure_user("demo-x", "published-pw", clinic, Role.THERAPIST, "Dee Example")
+    assert user.password.split("$")[1] == str(PUBLISHED_PASSWORD_ROUNDS)
+    assert not user.check_password("another-pw")
+    assert user.check_password("published-pw")  # signing in: Django hashes it again
+    user.refresh_from_db()
+    assert user.password.split("$")[1] == str(PBKDF2PasswordHasher.iterations)
+    assert user.check_password("published-pw")

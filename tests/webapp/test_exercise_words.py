@@ -105,7 +105,7 @@ def test_new_exercise_form_has_a_heading_and_plain_labels(client, world):
     page = client.get(reverse("exercises:create")).content.decode()
     assert "<h1>New exercise</h1>" in page
     text = visible_text(page)
-    assert "Reference recording" in text and "key poses" in text
+    assert "The reference" in text and "key poses" in text
     assert not internal_words(text)
     assert not re.search(r"\d+;\d+", text), "no frame-list syntax on the form"
 

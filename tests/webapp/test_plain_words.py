@@ -6,6 +6,10 @@ and the visible text of each page is searched for what only the software should 
 rigs' joint names ("LeftUpperArm"), `tutor_adjusted`, γ, "channels", record ids, "tutor", the
 analysis's own counts ("key poses the analysis found"), "latency p95", and the demo accounts'
 passwords (a production clinic's pages would show them too).
+
+The exercise's model performance has one name per reader: "the reference" on the staff's pages
+(in their own words: the sentences said to the patient, quoted on those pages inside
+`data-patient-words`, keep the patient's name), "the demonstration" on the patient's pages.
 """
 
 from __future__ import annotations
@@ -24,18 +28,22 @@ from webapp.recordings.words import body_part, file_problem, key_pose_name, plur
 USERS = ("demo-therapist", "demo-patient", "demo-admin")
 SKIPPED = re.compile(r"/logout|/api/|/admin/|\.(csv|pdf|json|bin|bvh|gz)$|/static/|/media/")
 INVISIBLE = {"script", "style", "template", "noscript", "head"}
+VOID = {"area", "base", "br", "col", "embed", "hr", "img", "input", "link", "meta", "source", "wbr"}
 ID = re.compile(r"\b[0-9a-f]{8}-[0-9a-f]{2,4}", re.IGNORECASE)  # whole or cut short
 MAX_PAGES = 400
 
 
 class Page(HTMLParser):
-    """The visible text and the followable links of one HTML page."""
+    """The visible text and the followable links of one HTML page; `own` is the visible text
+    outside the words quoted as said to the patient (elements with `data-patient-words`)."""
 
     def __init__(self) -> None:
         super().__init__()
         self.links: list[str] = []
         self.text: list[str] = []
+        self.own: list[str] = []
         self.hidden = 0
+        self.open: list[tuple[str, bool]] = []  # open elements: tag, quotes the patient's words
 
     def handle_starttag(self, tag, attrs):
         values = dict(attrs)
@@ -43,19 +51,29 @@ class Page(HTMLParser):
             self.hidden += 1
         if tag == "a" and values.get("href") and "download" not in values:
             self.links.append(values["href"])
+        if tag not in VOID:
+            self.open.append((tag, "data-patient-words" in values))
 
     def handle_endtag(self, tag):
         if tag in INVISIBLE:
             self.hidden = max(0, self.hidden - 1)
+        if any(name == tag for name, _ in self.open):
+            while self.open and self.open.pop()[0] != tag:
+                pass
 
     def handle_data(self, data):
         if not self.hidden and data.strip():
             self.text.append(data.strip())
+            if not any(quoted for _, quoted in self.open):
+                self.own.append(data.strip())
 
 
-def crawl(client, html: dict[str, str] | None = None) -> dict[str, str]:
+def crawl(
+    client, html: dict[str, str] | None = None, own: dict[str, str] | None = None
+) -> dict[str, str]:
     """Visible text of every page reachable from "/" by same-site links (path → text); `html`,
-    when given, receives each HTML page's whole markup (path → markup)."""
+    when given, receives each HTML page's whole markup (path → markup), `own` each page's text
+    outside the patient's quoted words (path → text)."""
     seen: dict[str, str] = {}
     todo = ["/"]
     while todo and len(seen) < MAX_PAGES:
@@ -72,6 +90,8 @@ def crawl(client, html: dict[str, str] | None = None) -> dict[str, str]:
         if html is not None:
             html[path] = response.content.decode()
         seen[path] = " | ".join(page.text)
+        if own is not None:
+            own[path] = " | ".join(page.own)
         for href in page.links:
             parts = urlparse(urljoin(path, href))
             if parts.scheme not in ("", "http") or parts.netloc not in ("", "testserver"):
@@ -102,6 +122,21 @@ UNPLAIN = re.compile(
 )
 
 
+# The staff's name for the exercise's model performance is "the reference"; the patient's is "the
+# demonstration" (issue 38: the same thing was called tutor, reference and demonstration).
+NOT_STAFF_NAME = re.compile(
+    r"\bdemonstrations?\b|\breference (recording|movement|motion)s?\b", re.I
+)
+NOT_PATIENT_NAME = re.compile(r"\breferences?\b|\breference's\b", re.IGNORECASE)
+
+
+def other_names(text: str, patient: bool) -> list[str]:
+    """Names of the reference a page should not use: `text` is a patient's page's visible text,
+    or a staff page's own words (without the sentences quoted as said to the patient)."""
+    wrong = NOT_PATIENT_NAME if patient else NOT_STAFF_NAME
+    return [m.group(0) for m in wrong.finditer(text)]
+
+
 def internal_words(text: str, joints: set[str]) -> list[str]:
     found = [j for j in joints if re.search(rf"\b{re.escape(j)}\b", text)]
     found += [w for w in ("tutor_adjusted", "γ") if w in text]
@@ -121,10 +156,15 @@ def test_no_page_of_the_demo_shows_internal_words(client, settings):
     pages = 0
     for username in USERS:
         assert client.login(username=username, password=f"{username}-pw")
-        texts = crawl(client)
+        own: dict[str, str] = {}
+        texts = crawl(client, own=own)
         pages += len(texts)
         for path, text in texts.items():
-            if words := internal_words(text, joints):
+            # /my/… pages (the camera page the staff may open too) speak to the patient.
+            patient = username == "demo-patient" or path.startswith("/my/")
+            words = internal_words(text, joints)
+            words += other_names(text if patient else own.get(path, ""), patient)
+            if words:
                 problems[f"{username} {path}"] = sorted(set(words))
         client.logout()
     # The walk reaches the recordings, the patients' pages and the reports of the demo data.
@@ -148,6 +188,27 @@ def test_the_checker_finds_what_it_looks_for():
         ["Tutor", "key poses the analysis found", "latency p95", "demo-admin-pw"]
     )
     assert internal_words("Left upper arm, level 0.8, 3 repetitions, 37.8 s", joints) == []
+
+
+def test_each_reader_has_one_name_for_the_reference():
+    staff = "Replace the reference recording | Play the reference | the demonstration, kept in step"
+    assert other_names(staff, patient=False) == ["reference recording", "demonstration"]
+    assert other_names("Key poses of the reference | the reference's pose", patient=False) == []
+    patient = "Watch the demonstration | your movement adjusted to the reference"
+    assert other_names(patient, patient=True) == ["reference"]
+    assert other_names("Watch the demonstration and do the same", patient=True) == []
+
+
+def test_the_staffs_own_words_leave_out_what_the_patient_is_told():
+    page = Page()
+    page.feed(
+        "<main><h3>Feedback</h3><ol data-patient-words><li>Stop where the demonstration stops"
+        '<br></li></ol><p>Replace the reference</p><textarea data-patient-words>F:"x"</textarea>'
+        "<input name=a></main>"
+    )
+    assert page.own == ["Feedback", "Replace the reference"]
+    assert page.text == ["Feedback", "Stop where the demonstration stops", "Replace the reference",
+                         'F:"x"']  # fmt: skip
 
 
 @pytest.mark.parametrize(

@@ -12,6 +12,7 @@ from django.utils import timezone
 from analysis.pipeline.gestures import Pace
 from analysis.pipeline.results import AnalysisSummary, ExerciseMatch, RepetitionResult
 from tests.personas import make_exercise, make_recording, make_world
+from webapp.live import services
 from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 from workers.analysis_task import earlier_pace
 
@@ -75,3 +76,24 @@ def test_an_earlier_session_that_did_not_fit_or_has_no_excursion_is_not_used(wor
         del rep["excursion"]  # analysed before the excursion was stored
     AnalysisRun.objects.filter(recording=earlier).update(summary=stored)
     assert earlier_pace(make_recording(world.patient, exercise)) is None
+
+
+def test_a_live_session_is_judged_against_the_pace_its_saved_analysis_will_use(world):
+    """Live words and the saved session's page come from one judgement only if both read the
+    same usual pace: the live session's options take it from the sessions before it, and a
+    replay from the sessions before the replayed recording."""
+    world, exercise = world
+    earlier = make_recording(world.patient, exercise)
+    _analysed(earlier, 5, _summary([(1.6, 1.0), (1.5, 1.0), (1.7, 1.0)]))
+    live = services.create_session(patient=world.patient, exercise=exercise, user=world.therapist)
+    own = services.session_options(live).own_pace
+    assert own == Pace(1.6, 1.0, earlier=True)
+    saved = make_recording(world.patient, exercise)  # what the session stores when it ends
+    assert earlier_pace(saved) == own
+    replay = services.create_session(
+        patient=world.patient,
+        exercise=exercise,
+        user=world.therapist,
+        replay_of=Recording.objects.get(pk=earlier.pk),
+    )
+    assert services.session_options(replay).own_pace is None  # nothing before the replayed one

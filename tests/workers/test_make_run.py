@@ -9,7 +9,9 @@
   past it an analysis fails with the plain reason, and the worker analyses the next upload;
 - a run whose worker dies twice (its pool process killed, then the whole worker) fails with the
   plain reason and is not claimed a third time; one past the hard time limit fails with its own;
-- SIGTERM to the launcher leaves none of its processes after 10 s, even mid-analysis.
+- SIGTERM to the launcher leaves none of its processes after 10 s, even mid-analysis;
+- with ``--demo`` (what `make run` runs) the page answers before the demo's recordings are
+  analysed, and the worker then analyses them all.
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ import os
 import re
 import signal
 import sqlite3
+import subprocess
+import sys
 import time
 import uuid
 from pathlib import Path
@@ -26,7 +30,7 @@ from pathlib import Path
 import pytest
 import requests
 
-from tests.local_server import LocalServer
+from tests.local_server import ROOT, LocalServer
 from tests.personas import FIXTURES, PASSWORD
 from tests.workers.test_quiet_log import check_quiet_log
 from workers.limits import MEMORY_MESSAGE, died_too_often_message, time_limit_message
@@ -321,3 +325,51 @@ def test_sigterm_to_the_launcher_leaves_none_of_its_processes_after_10_s(site):
     assert not left, f"still running after 10 s: {left}\n" + site.log_tail()
     assert launcher.wait(timeout=1) == 0
     assert "stopping (SIGTERM)" in site.log_tail()
+
+
+def demo_runs(site: LocalServer) -> list[str]:
+    """The status of each analysis run in the site's database."""
+    with sqlite3.connect(site.data_dir / "db.sqlite3") as db:
+        return [row[0] for row in db.execute("SELECT status FROM recordings_analysisrun")]
+
+
+def test_make_run_serves_the_page_first_and_the_worker_analyses_the_demo(tmp_path):
+    """`make run` (`workers.local --demo`): the page answers while the demo's recordings are
+    still queued or being analysed, as the therapist's recordings list says; the worker then
+    analyses every one and builds each exercise's first model."""
+    site = LocalServer(tmp_path / "make-run-demo", demo=False)
+    site.prepare()  # migrated, nothing loaded: the launcher loads the demo itself
+    with site.log_path.open("ab") as log:
+        site.process = subprocess.Popen(
+            [sys.executable, "-m", "workers.local", "--demo", f"127.0.0.1:{site.port}"],
+            cwd=ROOT, env=site.env(), stdout=log, stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 120
+        while not site.answers():
+            assert site.running() and time.monotonic() < deadline, site.log_tail()
+            time.sleep(0.2)
+        statuses = demo_runs(site)
+        assert len(statuses) == 6 and not set(statuses) <= DONE, statuses
+        token = requests.post(
+            f"{site.url}/api/v1/auth/token/",
+            json={"username": "demo-therapist", "password": "demo-therapist-pw"},
+        ).json()["token"]
+        headers = {"Authorization": f"Token {token}"}
+        with sqlite3.connect(site.data_dir / "db.sqlite3") as db:
+            ids = [uuid.UUID(row[0]) for row in db.execute("SELECT id FROM recordings_recording")]
+        pages = [f"{site.url}/api/v1/recordings/{pk}/" for pk in ids]
+        shown = {requests.get(page, headers=headers, timeout=30).json()["status"] for page in pages}
+        assert shown & {"queued", "running"}, shown
+        while set(demo_runs(site)) != {"succeeded"}:
+            assert site.running() and time.monotonic() < deadline + 300, site.log_tail()
+            time.sleep(1)
+        with sqlite3.connect(site.data_dir / "db.sqlite3") as db:
+            versions = db.execute(
+                "SELECT m.version FROM exercises_exercise e "
+                "JOIN exercises_exercisemodel m ON m.id = e.active_model_id"
+            ).fetchall()
+        assert sorted(versions) == [(1,), (1,), (1,)], "one model built per exercise"
+    finally:
+        site.stop()

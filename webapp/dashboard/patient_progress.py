@@ -117,7 +117,7 @@ def reference(request: HttpRequest, pk) -> JsonResponse:
         prescribed_exercises(patient, visible_exercises(request.user)), pk=pk
     )
     if not exercise.tutor_ready():  # a reference video the worker has not read yet
-        return JsonResponse({"detail": "The reference movement is not ready yet."}, status=409)
+        return JsonResponse({"detail": "The demonstration is not ready yet."}, status=409)
     motion = exercise.tutor_motion()
     return JsonResponse(
         {

@@ -1,5 +1,6 @@
 """The demo clinic: a therapist, a clinic admin, two patients (one with an account), three exercises
-with UI-PRMD tutors and built models, and a few analysed UI-PRMD recordings per patient.
+with UI-PRMD tutors and their models, and a few UI-PRMD recordings per patient with their analyses
+(made here or by a worker: `webapp.demo.recordings`).
 
 Idempotent: loading twice keeps existing rows and never duplicates them.
 """
@@ -13,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from django.conf import settings
+from django.contrib.auth.hashers import PBKDF2PasswordHasher, get_hasher, make_password
 from django.core.files.base import ContentFile
 from django.db import transaction
 
@@ -80,9 +82,22 @@ def ensure_user(username: str, password: str, clinic: Clinic, role: str, name: s
     if created:
         first, _, last = name.partition(" ")
         user.first_name, user.last_name = first, last
-        user.set_password(password)
+        user.password = published_password_hash(password)
         user.save()
     return user
+
+
+# A published password's hash protects nothing: hashed with few rounds, it costs the loader (and
+# so `make run`'s first page) nothing, not a second or more each; Django hashes it again with its
+# full work factor when the account first signs in (the hasher's `must_update`).
+PUBLISHED_PASSWORD_ROUNDS = 1000
+
+
+def published_password_hash(password: str) -> str:
+    hasher = get_hasher()
+    if not isinstance(hasher, PBKDF2PasswordHasher):  # a site with another hasher: its own way
+        return make_password(password)
+    return hasher.encode(password, hasher.salt(), iterations=PUBLISHED_PASSWORD_ROUNDS)
 
 
 def ensure_exercise(clinic: Clinic, spec: DemoExercise) -> Exercise:
@@ -119,7 +134,9 @@ DEMO_ACCOUNTS = (
 
 
 @transaction.atomic
-def load_demo_clinic() -> Clinic:
+def load_demo_clinic(*, analyse_here: bool = True) -> Clinic:
+    """The demo clinic's rows and files; its analyses run here (``analyse_here``) or are left
+    to a worker (enqueued when this transaction commits: `webapp.demo.recordings`)."""
     clinic, _ = Clinic.objects.get_or_create(name=DEMO_CLINIC)
     (therapist_name, therapist_pw), (patient_name, patient_pw), (admin_name, admin_pw) = (
         DEMO_ACCOUNTS
@@ -138,5 +155,6 @@ def load_demo_clinic() -> Clinic:
     second.therapists.add(therapist)
     exercises = {spec.name: ensure_exercise(clinic, spec) for spec in DEMO_EXERCISES}
     plan = {patient: PAT_RECORDINGS, second: ROBIN_RECORDINGS}
-    load_recordings(UI_PRMD, plan, exercises, therapist)
+    # positional: tests replace load_recordings with `lambda *args: None`
+    load_recordings(UI_PRMD, plan, exercises, therapist, analyse_here)
     return clinic

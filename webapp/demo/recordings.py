@@ -1,9 +1,12 @@
-"""The demo clinic's analysed recordings: UI-PRMD sessions analysed in this process at load time.
+"""The demo clinic's recordings: UI-PRMD sessions, each stored through the upload service like any
+upload (checks, storage, first run, its analysis enqueued after the commit).
 
-Each exercise's model is built once (about a second each). Each recording goes through the upload
-service like any upload (checks, storage, first run), and its run is analysed in this process
-(`analyse_now`), so a fresh `make run` shows results even before a worker is started. Recordings
-are matched by checksum: loading twice adds nothing.
+Where a worker will take the analyses (`make run`: the worker starts beside the server), the
+loader only stores them: the site comes up without waiting for them, the demo's recordings show
+as being analysed like any upload, and the first analysis of each exercise builds its model in
+the worker. With ``analyse_here`` (no worker will come: `make demo`, the tests) each exercise's
+model is built and each run analysed in this process before the loader returns.
+Recordings are matched by checksum: loading twice adds nothing.
 """
 
 from __future__ import annotations
@@ -35,7 +38,13 @@ class DemoRecording:
 
 
 def ensure_recording(
-    root: Path, patient: Patient, exercise: Exercise, spec: DemoRecording, user: User
+    root: Path,
+    patient: Patient,
+    exercise: Exercise,
+    spec: DemoRecording,
+    user: User,
+    *,
+    analyse_here: bool,
 ) -> Recording:
     content = (root / spec.file).read_bytes()
     checksum = hashlib.sha256(content).hexdigest()
@@ -49,8 +58,8 @@ def ensure_recording(
     )
     when = timezone.now() - datetime.timedelta(days=spec.days_ago)
     Recording.objects.filter(pk=recording.pk).update(uploaded_at=when)
-    if run is not None:
-        analyse_now(run)
+    if run is not None and analyse_here:
+        analyse_now(run)  # the message enqueued at the commit then finds the run taken
     return recording
 
 
@@ -75,14 +84,16 @@ def load_recordings(
     plan: dict[Patient, tuple[DemoRecording, ...]],
     exercises: dict[str, Exercise],
     user: User,
+    analyse_here: bool,
 ) -> None:
-    for exercise in exercises.values():
-        build_model_now(exercise)  # builds version 1 the first time
+    if analyse_here:
+        for exercise in exercises.values():
+            build_model_now(exercise)  # builds version 1 the first time
     for patient, specs in plan.items():
         for spec in specs:
             exercise = exercises[spec.exercise]
             ensure_prescription(patient, exercise, weeks_ago=4)
-            ensure_recording(root, patient, exercise, spec, user)
+            ensure_recording(root, patient, exercise, spec, user, analyse_here=analyse_here)
         # The demo's history is in the past: the patient was last active at their newest upload.
         newest = patient.recordings.aggregate(at=Max("uploaded_at"))["at"]
         Patient.objects.filter(pk=patient.pk).update(last_activity_at=newest)

@@ -11,7 +11,6 @@ the therapist types (line and column of the first error) and saves it when asked
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Callable
 from functools import wraps
 
@@ -26,16 +25,17 @@ from analysis.feedback import GrammarError, check_names
 from analysis.landmarks import suggest_key_poses
 from webapp.accounts.permissions import get_exercise_for_user, require_staff
 from webapp.audit import log
-from webapp.exercises import body_parts, services
+from webapp.exercises import services
 from webapp.exercises.annotate_data import (
     angle_curves,
     default_grammar_text,
     grammar_has_findings,
-    grammar_names,
     movement_order,
+    older_names,
     plain_labels,
     tutor_pose,
     type_names,
+    written_names,
 )
 from webapp.exercises.body_parts import offered, representatives, ticked
 from webapp.exercises.forms import LandmarksForm
@@ -199,16 +199,17 @@ def kept_type_names(posted: dict, earlier: dict, types: list[int]) -> dict[str, 
 
 
 def grammar_verdict(text: str, exercise: Exercise) -> dict:
-    """Whether the grammar parses and names only the exercise's body parts (as the grammar
-    writes them) and key-pose types; else the first problem with its line and column."""
+    """Whether the grammar parses and names only the exercise's body parts (in the words of the
+    body-part ticks, or as older rules wrote them) and key-pose types; else the first problem
+    with its line and column."""
     skeleton = exercise.tutor_motion().skeleton
-    written = grammar_names(tuple(skeleton.names))
+    written = sorted(set(written_names(skeleton).values()))
     try:
-        rules = check_names(text, sorted(set(written.values())), type_names(exercise))
+        rules = check_names(text, written, type_names(exercise), also=older_names(skeleton))
     except GrammarError as error:
         return {
             "valid": False,
-            "message": in_tick_words(error.message, written, body_parts.plain_labels(skeleton)),
+            "message": error.message,
             "line": error.line,
             "column": error.column,
         }
@@ -219,18 +220,6 @@ def already_there(grammar: str, rule: str) -> bool:
     """Whether the rule is already a line of the rules (spaces aside)."""
     squeeze = "".join
     return squeeze(rule.split()) in {squeeze(line.split()) for line in grammar.splitlines()}
-
-
-def in_tick_words(message: str, written: dict[str, str], labels: dict[str, str]) -> str:
-    """A rule error's body-part names followed by the words the body-part ticks use, where they
-    differ ("waist (the hips)"), so the message and the ticks name one body part alike."""
-    for joint, name in sorted(written.items(), key=lambda item: -len(item[1])):
-        tick = labels.get(joint, "")
-        if tick and tick != name.replace("_", " "):
-            message = re.sub(
-                rf"(?<![\w$@]){re.escape(name)}(?!\w)", f"{name} (the {tick})", message
-            )
-    return message
 
 
 @login_required

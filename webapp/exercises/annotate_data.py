@@ -11,13 +11,16 @@
 
 from __future__ import annotations
 
+import re
 from collections import Counter
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from analysis.bvh import Motion
+from analysis.bvh import Motion, Skeleton
 from analysis.feedback import Grammar, GrammarError, default_grammar
+from analysis.feedback.grammar import rename_joints
 from analysis.feedback.text import joint_label
 from analysis.kinematics import positions, rotations
 from analysis.pipeline.model_fit import moving_joints
@@ -25,6 +28,7 @@ from webapp.exercises import body_parts
 from webapp.recordings.words import key_pose_name
 
 DEFAULT_GRAMMAR_JOINTS = 3  # joints a default grammar speaks of when the key poses pick none
+_WRITABLE = re.compile(r"[A-Za-z_][A-Za-z0-9_.:]*")  # a joint name the grammar reads
 
 
 def angle_curves(motion: Motion) -> dict[str, list[float]]:
@@ -59,15 +63,52 @@ def plain_labels(motion: Motion) -> dict[str, str]:
     return body_parts.plain_labels(motion.skeleton)
 
 
-def grammar_names(names: tuple[str, ...]) -> dict[str, str]:
-    """How each joint is written in a grammar: its readable form with underscores
-    ("left_thigh"), or the rig's name where two joints would read the same."""
-    readable = {name: joint_label(name).replace(" ", "_") for name in names}
-    counts = Counter(readable.values())
+def grammar_names(
+    names: tuple[str, ...], labels: Mapping[str, str] | None = None
+) -> dict[str, str]:
+    """How each joint is written in a grammar: its plain words with underscores ("left_thigh";
+    given ``labels``, the words of the body-part ticks, "hips" for a rig's "Waist"), or the rig's
+    name where two joints would read the same or the words would be another joint's older
+    spelling (its readable form, which stored rules may use)."""
+    readable = {name: joint_label(name) for name in names}
+    plain = {name: (labels or {}).get(name, readable[name]).replace(" ", "_") for name in names}
+    counts = Counter(plain.values())
     return {
-        name: plain if counts[plain] == 1 and plain[:1].isalpha() else name
-        for name, plain in readable.items()
+        name: words
+        if counts[words] == 1
+        and _WRITABLE.fullmatch(words)
+        and all(readable[other] != joint_label(words) for other in names if other != name)
+        else name
+        for name, words in plain.items()
     }
+
+
+def written_names(skeleton: Skeleton) -> dict[str, str]:
+    """The rig's joints as rules write them: in the words of the body-part ticks."""
+    return grammar_names(tuple(skeleton.names), body_parts.plain_labels(skeleton))
+
+
+def older_names(skeleton: Skeleton) -> set[str]:
+    """Spellings rules were written in before they took the ticks' words ("waist", "spine"):
+    still understood, so stored rules keep working."""
+    return set(grammar_names(tuple(skeleton.names)).values()) | set(skeleton.names)
+
+
+def rig_grammar(text: str, skeleton: Skeleton) -> str:
+    """The rules with body parts in the rig's own names, as the analysis matches them ("@hips$3"
+    becomes "@Waist$3"); older spellings and the rest of the text are left as written."""
+    by_words = {
+        joint_label(written): rig
+        for rig, written in written_names(skeleton).items()
+        if _WRITABLE.fullmatch(rig)
+    }
+    taken = {joint_label(rig) for rig in skeleton.names}
+    return rename_joints(
+        text,
+        lambda joint: (
+            joint if joint_label(joint) in taken else by_words.get(joint_label(joint), joint)
+        ),
+    )
 
 
 def type_names(exercise) -> dict[int, str]:
@@ -94,7 +135,7 @@ def grammar_joints(exercise, motion: Motion, order: list[str]) -> list[str]:
 
 def default_grammar_text(exercise, motion: Motion, order: list[str]) -> str:
     joints = grammar_joints(exercise, motion, order) or order[:DEFAULT_GRAMMAR_JOINTS]
-    written = grammar_names(tuple(motion.skeleton.names))
+    written = written_names(motion.skeleton)
     return default_grammar([written.get(j, j) for j in joints], type_names(exercise))
 
 

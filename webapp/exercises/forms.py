@@ -31,7 +31,7 @@ class ExerciseForm(forms.ModelForm):
     still take them from a script that knows their frames (the demo, tests)."""
 
     tutor = forms.FileField(
-        label="Reference recording", help_text=REFERENCE_HELP, widget=REFERENCE_WIDGET
+        label="The reference", help_text=REFERENCE_HELP, widget=REFERENCE_WIDGET
     )
     landmark_frames = forms.CharField(required=False, widget=forms.HiddenInput)
     landmark_types = forms.CharField(required=False, widget=forms.HiddenInput)
@@ -131,7 +131,7 @@ class ReferenceForm(forms.Form):
     """A new reference recording for an exercise."""
 
     tutor = forms.FileField(
-        label="New reference recording", help_text=REFERENCE_HELP, widget=REFERENCE_WIDGET
+        label="The new reference", help_text=REFERENCE_HELP, widget=REFERENCE_WIDGET
     )
 
     def __init__(self, *args, **kwargs):

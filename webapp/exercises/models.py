@@ -95,6 +95,12 @@ class Exercise(models.Model):
     def solved_video_name(self) -> str:
         return self.tutor_file.name + SOLVED_VIDEO
 
+    @property
+    def followable_live(self) -> bool:
+        """A new live session can follow it: in use (not archived) with a model built, since
+        every frame is aligned with the model."""
+        return self.active_model_id is not None and self.archived_at is None
+
     def tutor_ready(self) -> bool:
         """False while a reference video waits for the worker to find the person in it."""
         storage = self.tutor_file.storage

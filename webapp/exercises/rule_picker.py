@@ -23,7 +23,7 @@ from django.core.exceptions import ValidationError
 from analysis.assessment.joints import N_LEVELS
 from analysis.bvh import Skeleton
 from analysis.bvh.rigs import identify
-from webapp.exercises.annotate_data import grammar_names, type_names
+from webapp.exercises.annotate_data import type_names, written_names
 from webapp.exercises.body_parts import offered, plain_labels
 
 LEVEL_STEP_DEG = 10
@@ -76,7 +76,7 @@ class RuleForm(forms.Form):
     def __init__(self, *args, exercise, skeleton: Skeleton, **kwargs):
         super().__init__(*args, **kwargs)
         labels = plain_labels(skeleton)
-        self.written = grammar_names(tuple(skeleton.names))
+        self.written = written_names(skeleton)
         self.angles = bending_angles(skeleton)
         parts = offered(skeleton, skeleton.names[1:])
         self.fields["part"].choices = sorted(((p, labels[p]) for p in parts), key=lambda c: c[1])

@@ -41,12 +41,11 @@ def _prescription(request: HttpRequest, pk: Any) -> Prescription:
 def page(request: HttpRequest, pk: Any) -> HttpResponse:
     prescription = _prescription(request, pk)
     exercise = prescription.exercise
-    ready = exercise.active_model_id is not None and exercise.archived_at is None
     context = {
         "prescription": prescription,
         "patient": prescription.patient,
         "exercise": exercise,
-        "ready": ready,
+        "ready": exercise.followable_live,
         "for_patient": request.user.is_patient,
         "fps": FPS,
         "start_url": reverse("camera:start", args=[prescription.pk]),
@@ -60,7 +59,7 @@ def start(request: HttpRequest, pk: Any) -> JsonResponse:
     """A new live session for the prescription: where the page sends its landmarks."""
     prescription = _prescription(request, pk)
     exercise = prescription.exercise
-    if exercise.active_model_id is None or exercise.archived_at is not None:
+    if not exercise.followable_live:
         return JsonResponse({"error": NOT_READY}, status=409)
     live = services.create_session(
         patient=prescription.patient, exercise=exercise, user=request.user

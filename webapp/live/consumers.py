@@ -230,10 +230,11 @@ class LiveConsumer(AsyncWebsocketConsumer):
             # a second recording under the first one's name
             await database_sync_to_async(services.refuse_if_ended)(self.key)
             model = await database_sync_to_async(services.exercise_model)(self.live.exercise)
-            state = SESSIONS.setdefault(
-                self.key,
-                SessionState(model, max_fps=settings.LIVE_MAX_FPS, burst=settings.LIVE_BURST),
+            options = await database_sync_to_async(services.session_options)(self.live)
+            made = SessionState(
+                model, max_fps=settings.LIVE_MAX_FPS, burst=settings.LIVE_BURST, options=options
             )
+            state = SESSIONS.setdefault(self.key, made)
             await database_sync_to_async(services.mark_live)(self.live)
         return state
 

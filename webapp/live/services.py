@@ -15,7 +15,7 @@ from django.db.models import Q, QuerySet
 from django.utils import timezone
 
 from analysis.bvh import Motion, read
-from analysis.live import rehearse
+from analysis.live import LiveOptions, rehearse
 from analysis.pipeline import FittedModel
 from webapp.accounts.models import User
 from webapp.accounts.permissions import clinic_scoped
@@ -23,6 +23,7 @@ from webapp.exercises.models import Exercise
 from webapp.live.models import LiveSession, LiveStatus
 from webapp.patients.models import Patient, Prescription
 from webapp.recordings.models import Recording
+from webapp.recordings.pace import usual_pace
 from webapp.recordings.storage import read_verified
 from webapp.recordings.uploads import MIN_FRAMES, ParsedUpload, parse_upload, store_recording
 from workers.exercise_models import NoUsableModelError, load_active
@@ -82,6 +83,15 @@ def exercise_model(exercise: Exercise) -> FittedModel:
         rehearse(model)  # here, in a worker thread, not while the event loop's frames wait
         _REHEARSED.add(row.pk)
     return model
+
+
+def session_options(live: LiveSession) -> LiveOptions:
+    """The live judgement's options: the patient's usual pace as the worker's analysis of the
+    saved session will read it (their latest session before this one; for a replay, before the
+    replayed recording), so the words said live are the words its page says later."""
+    replayed = live.replay_of
+    before = replayed.uploaded_at if replayed is not None else live.created_at
+    return LiveOptions(own_pace=usual_pace(live.patient_id, live.exercise_id, before))
 
 
 # A session whose capture system sent nothing for this long has stopped without saying so (a
@@ -150,8 +160,7 @@ def startable_of(
         for p in prescriptions
         if p.start_date <= today
         and (p.end_date is None or p.end_date >= today)
-        and p.exercise.active_model_id is not None
-        and p.exercise.archived_at is None
+        and p.exercise.followable_live
     }
     return sorted(chosen.values(), key=lambda exercise: exercise.name)
 

@@ -66,7 +66,9 @@ def check_levels(run: AnalysisRun, data: Any) -> list[tuple[int, str, int]]:
         if joint not in joints:
             raise ValidationError({"levels": f"Unknown joint {joint!r}."})
         if not 1 <= level <= MAX_LEVEL:
-            raise ValidationError({"levels": f"Levels go from 1 (as the tutor) to {MAX_LEVEL}."})
+            raise ValidationError(
+                {"levels": f"Levels go from 1 (like the reference) to {MAX_LEVEL}."}
+            )
         out.append((frame, joint, level))
     return out
 

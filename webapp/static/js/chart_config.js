@@ -23,5 +23,18 @@
     xaxis: { type: "date", title: { text: xTitle }, range: axis.range, tick0: axis.tick0, dtick: axis.dtick, tickformat: axis.tickformat, ...(extra.xaxis || {}) },
     yaxis: { title: { text: yTitle }, ...(extra.yaxis || {}) },
   });
+  // A legend entry is one line and Plotly cuts off what passes the chart's edge: on a phone-wide
+  // chart, long names ("Left shoulder elevation (arm to trunk) (normal 0° to 180°)") are broken
+  // into lines of about 30 characters at spaces, so each entry fits the chart.
+  window.legendName = (text) => {
+    if (window.innerWidth > 640) return text;
+    const lines = [];
+    for (const word of String(text).split(" ")) {
+      const last = lines.length - 1;
+      if (last >= 0 && (lines[last] + " " + word).length <= 30) lines[last] += " " + word;
+      else lines.push(word);
+    }
+    return lines.join("<br>");
+  };
   if (window.Plotly) window.Plotly.setPlotConfig(base);
 })();

@@ -24,7 +24,7 @@
     fillcolor: "#d0d7de", opacity: 0.35, line: { width: 0 }, layer: "below",
   }] : []);
   const bandLegend = (ex) => (ex.band ? [{
-    x: [null], y: [null], name: ex.band.text, mode: "lines", line: { color: "#d0d7de", width: 10 }, hoverinfo: "skip",
+    x: [null], y: [null], name: window.legendName(ex.band.text), mode: "lines", line: { color: "#d0d7de", width: 10 }, hoverinfo: "skip",
   }] : []);
   const withGoalDates = (ex) => {
     const ends = goals.filter((g) => g.chart === "angle" && g.exercise === ex.exercise).map((g) => `${g.by} 23:59:59`);
@@ -34,7 +34,7 @@
   };
   exercises.forEach((ex) => {
     const angles = ex.angles.filter((a) => a.shown).map((a) => ({
-      x: ex.x, y: a.range, name: a.label, mode: "lines+markers", connectgaps: false, customdata: ex.when,
+      x: ex.x, y: a.range, name: window.legendName(a.label), mode: "lines+markers", connectgaps: false, customdata: ex.when,
       hovertemplate: `${a.label}: %{y:.1f}°<extra>%{customdata}</extra>`,
     }));
     const chart = withGoalDates(ex);

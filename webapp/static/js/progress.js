@@ -19,7 +19,7 @@
   // The legend sits above the plot, right-aligned: it never covers an axis title.
   const layout = (ex, yTitle, extra = {}) => window.progressLayout(ex.axis, "date of the session", yTitle, extra);
   const line = (ex, y, name, unit) => ({
-    x: ex.x, y, name, mode: "lines+markers", connectgaps: true, customdata: ex.when,
+    x: ex.x, y, name: window.legendName(name), mode: "lines+markers", connectgaps: true, customdata: ex.when,
     hovertemplate: `${name}: %{y:.1f}${unit}<extra>%{customdata}</extra>`,
   });
   // Goals (dashed, labelled "goal" with the unit) from the first session to the goal's date.

@@ -117,7 +117,7 @@ function angleTraces(meta, seconds) {
   const anyInvolved = meta.angles.series.some((s) => s.involved);
   return meta.angles.series.map((s, i) => ({
     x, y: s.values, mode: "lines", connectgaps: false,
-    name: s.normal ? `${s.label} (normal ${s.normal[0]}° to ${s.normal[1]}°)` : s.label,
+    name: window.legendName(s.normal ? `${s.label} (normal ${s.normal[0]}° to ${s.normal[1]}°)` : s.label),
     visible: (anyInvolved ? s.involved : i < 3) ? true : "legendonly",
   }));
 }
@@ -127,7 +127,7 @@ function segmentTraces(meta, seconds) {
   const x = meta.segments.frames.map(seconds);
   const joints = [...new Set(meta.segments.series.map((s) => s.joint))];
   return meta.segments.series.map((s) => ({
-    x, y: s.values, name: `${s.label} · ${s.skeleton_label ?? s.skeleton}`, mode: "lines",
+    x, y: s.values, name: window.legendName(`${s.label} · ${s.skeleton_label ?? s.skeleton}`), mode: "lines",
     line: { dash: s.skeleton === "patient" ? "solid" : "dot" },
     visible: joints.indexOf(s.joint) < 3 ? true : "legendonly",
   }));
