@@ -15,29 +15,44 @@ TEST_WORKERS ?= 2
 
 .PHONY: run worker beat test test-long test-analysis lint format bench bench-browser bench-live fuzz hostile migrate demo clean capture-check
 
-# --no-compile: byte-compiling every installed module (plotly alone has tens of thousands) was
-# most of a fresh install's time; Python compiles the few it imports, once, when first imported.
-PIP_INSTALL = $(BIN)/pip install --quiet --no-compile
+# uv (from PyPI, into the venv) resolves and installs in parallel from its own cache: a fresh
+# venv in seconds where pip took minutes (docs/PERFORMANCE.md). uv reads no pip configuration, so
+# deploy/uv_options.py hands it this machine's pip settings (indexes, wheel folders, constraints).
+# Where uv cannot be installed, pip does the same work. No byte-compiling at install (uv's
+# default, pip's --no-compile): of the tens of thousands of modules installed, Python compiles
+# the few it imports, once, at their first import.
+UV := $(BIN)/uv
+define install
+if [ -x $(UV) ]; then \
+	options="$$($(PYTHON) deploy/uv_options.py)" && mapfile -t options <<< "$$options" && \
+	$(UV) pip install --quiet --python $(BIN)/python "$${options[@]}" $(1); \
+else $(BIN)/pip install --quiet --no-compile $(1); fi
+endef
 
+# The interpreter's own pip puts uv into a venv made without pip (making one with pip cost more
+# than uv's whole install); pip, setuptools and wheel come with the project's dependencies.
 $(BIN)/python:
-	$(PYTHON) -m venv $(VENV)
-	$(PIP_INSTALL) --upgrade pip setuptools wheel
+	$(PYTHON) -m venv --without-pip $(VENV)
+	$(PYTHON) -m pip --python $(BIN)/python install --quiet --no-compile uv \
+		|| $(BIN)/python -m ensurepip --default-pip
 
 # Reinstall only when the dependency list changes.
 $(VENV)/.stamp-python: pyproject.toml | $(BIN)/python
-	$(PIP_INSTALL) -e '.[dev]'
-	$(PIP_INSTALL) --no-deps '$(MEDIAPIPE)'
+	$(call install,-e '.[dev]' pip setuptools wheel)
+	$(call install,--no-deps '$(MEDIAPIPE)')
 	touch $@
 
 $(VENV)/.stamp-bench: pyproject.toml | $(VENV)/.stamp-python
-	$(BIN)/pip install --quiet -e '.[dev,bench]'
+	$(call install,-e '.[dev,bench]')
 	touch $@
 
 node_modules/.stamp: package.json package-lock.json
 	npm ci --no-audit --no-fund --loglevel=error
 	touch $@
 
-deps: $(VENV)/.stamp-python node_modules/.stamp
+# Both installs at once: each waits on the disk and the network much of its time.
+deps:
+	@$(MAKE) --no-print-directory -j2 $(VENV)/.stamp-python node_modules/.stamp
 
 migrate: deps
 	$(BIN)/python manage.py migrate --noinput
@@ -51,8 +66,10 @@ demo: migrate
 # WORKER_CONCURRENCY analyses at a time (2). With REDIS_URL set, both use Redis instead. Serves
 # with DEBUG off (DEBUG=1 make run for the technical error pages and code reloading); SIGTERM or
 # Ctrl-C stops everything it started. ANALYSIS_MEMORY_LIMIT_MB caps each analysis (3072).
-# --demo loads the demo clinic first and leaves its analyses to the worker: the page comes first.
-run: migrate
+# --demo: the server's own process applies the migrations and loads the demo clinic before it
+# serves (one start-up of the site's code, not three), leaving the demo's analyses to the worker,
+# which starts once the server answers: the page comes first.
+run: deps
 	DEMO_ALLOWED=1 $(BIN)/python -m workers.local --demo 127.0.0.1:$(PORT)
 
 # Consumes every queue (analyses, models, reports); WORKER_QUEUES=analyses (comma-separated)
@@ -133,7 +150,7 @@ bench-scale: $(VENV)/.stamp-python
 	DATABASE_URL=$$url $(BIN)/python -m bench.bench_scale
 
 $(VENV)/.stamp-load: pyproject.toml | $(VENV)/.stamp-python
-	$(BIN)/pip install --quiet -e '.[dev,load]'
+	$(call install,-e '.[dev,load]')
 	touch $@
 
 # Load: gunicorn + 2 Celery workers + PostgreSQL + Redis on loopback, 50 browsing therapists and

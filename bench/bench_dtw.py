@@ -39,8 +39,10 @@ NOTES = """Calls: project `analysis.dtw.distance` / `distance_batch` / `align` w
 Euclidean cost (1-D distance: vectorised anti-diagonal sweep; d = 66: local costs as one BLAS
 matrix product per block of rows, on one BLAS thread, cells where the expansion could cancel
 recomputed exactly, on a second thread while the DP runs; 1-D with path: the same anti-diagonal
-sweep storing one back-pointer byte per cell; batch: the same local costs, one slice
-of repetitions per core); dtaidistance 2.5 `dtw.distance_fast`, `dtw_ndim.distance_fast`,
+sweep storing one back-pointer byte per cell; d = 66 with path: the same local costs, a row DP
+with back-pointers and no range tests; batch: pruned DP, local costs only for the cells whose
+accumulated cost stays under the corner-to-corner path's, computed from the differences);
+dtaidistance 2.5 `dtw.distance_fast`, `dtw_ndim.distance_fast`,
 `dtw_ndim.distance_matrix_fast(block=..., parallel=True)` (its fastest batched form) and
 `dtw.warping_path_fast`; tslearn `metrics.dtw`, `cdist_dtw`, `dtw_path`. Streaming:
 `analysis.online.OpenEndAligner.push`, Euclidean cost, 300 frames per run. The machine is a

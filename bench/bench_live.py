@@ -35,6 +35,10 @@ The clients run in one process on the same machine as the server.
         [--seconds 10] [--batch 3] [--processes 2] [--frames json,binary] [--redis-db 14]
         [--markdown FILE]
 
+``--server-cpus 1`` pins the server processes to those cores and the clients' process (this
+one) to the others, so that the clients' work is not counted against the server's cores: on a
+2-core machine the server then has one core to itself.
+
 ``--aligner`` also prints the in-process aligner's time per frame (``stream --model``);
 ``--stages`` prints only its processor time per frame sent by step (features, counter,
 open-end row, FP-C step, repetition end).
@@ -68,6 +72,7 @@ DATA = ROOT / "data" / "ui-prmd"
 TUTOR = "sessions/m07_s01_correct.bvh.gz"
 SESSION = "sessions/m07_s03_incorrect.bvh.gz"
 TARGET_MS = 50.0
+START_SECONDS = 180  # a server's start-up on a busy machine: imports and the first page
 
 
 def machine() -> str:
@@ -93,6 +98,7 @@ class Step:
     client_cpu: float = float("nan")  # processor seconds the clients' process used
     sent: int = 0
     seconds: float = 0.0
+    fps: float = 120.0  # each client's frames per second
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -138,7 +144,9 @@ def setup_world(env: dict[str, str]) -> dict[str, str]:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def start_server(kind: str, env: dict[str, str], port: int, log: Path) -> subprocess.Popen:
+def start_server(
+    kind: str, env: dict[str, str], port: int, log: Path, cpus: set[int] | None = None
+) -> subprocess.Popen:
     if kind == "runserver":
         argv = [sys.executable, "manage.py", "runserver", f"127.0.0.1:{port}", "--noreload"]
     elif kind == "uvicorn":
@@ -154,8 +162,10 @@ def start_server(kind: str, env: dict[str, str], port: int, log: Path) -> subpro
         argv = [sys.executable, "-m", "daphne", "-b", "127.0.0.1", "-p", str(port),
                 "-v", "0", "webapp.asgi:application"]  # fmt: skip
     handle = log.open("w")
+    if cpus:  # taskset execs the server: the same process id, pinned from its first instruction
+        argv = ["taskset", "-c", ",".join(map(str, sorted(cpus))), *argv]
     proc = subprocess.Popen(argv, env=env, cwd=ROOT, stdout=handle, stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + START_SECONDS
     while time.monotonic() < deadline:
         try:
             urllib.request.urlopen(f"http://127.0.0.1:{port}/healthz", timeout=2)
@@ -165,7 +175,7 @@ def start_server(kind: str, env: dict[str, str], port: int, log: Path) -> subpro
                 raise RuntimeError(f"the {kind} server stopped: see {log}") from None
             time.sleep(0.5)
     proc.terminate()
-    raise RuntimeError(f"the {kind} server did not answer in 60 s: see {log}")
+    raise RuntimeError(f"the {kind} server did not answer in {START_SECONDS} s: see {log}")
 
 
 def cpu_seconds(pid: int) -> float:
@@ -327,6 +337,7 @@ class Context:
     folder: Path
     processes: int = 1
     proxy: bool = False  # through docker-compose's nginx proxy (deploy/), 2 processes
+    server_cpus: set[int] | None = None  # the cores the server processes are pinned to
 
 
 def label(kind: str, ctx: Context) -> str:
@@ -335,6 +346,8 @@ def label(kind: str, ctx: Context) -> str:
         name += f", {ctx.processes} processes"
     if ctx.proxy:
         name += " behind nginx"
+    if ctx.server_cpus:
+        name += f", server on core {','.join(map(str, sorted(ctx.server_cpus)))} alone"
     plural = "s" if ctx.rec.batch > 1 else ""
     return f"{name}, {ctx.rec.batch} frame{plural}/message, {ctx.rec.form}"
 
@@ -345,8 +358,11 @@ def measure(kind: str, n: int, ctx: Context) -> Step:
     logs.mkdir(exist_ok=True)
     count = 1 if kind == "runserver" else ctx.processes
     ports = [free_port() for _ in range(count)]
-    procs = [start_server(kind, env, p, logs / f"{kind}-{n}-{i}.log") for i, p in enumerate(ports)]
-    step = Step(label(kind, ctx), n, sent=n * len(rec.frames))
+    procs = [
+        start_server(kind, env, p, logs / f"{kind}-{n}-{i}.log", ctx.server_cpus)
+        for i, p in enumerate(ports)
+    ]
+    step = Step(label(kind, ctx), n, sent=n * len(rec.frames), fps=fps)
     started, cpu = time.perf_counter(), [0.0]
     bases = [f"http://127.0.0.1:{port}" for port in ports]
 
@@ -407,7 +423,9 @@ def row(s: Step) -> str:
     )  # fmt: skip
     cpu = 1e3 * s.server_cpu / max(s.sent, 1)
     figures = f"{s.p50:.1f} | {s.p95:.1f} | {s.sent_p95:.1f} | {s.server_p95:.1f} | {cpu:.2f}"
-    return f"| {s.server} | {s.sessions} | {s.sessions * 120} | {figures} | {lost} | {verdict} |"
+    return (
+        f"| {s.server} | {s.sessions} | {s.sessions * s.fps:g} | {figures} | {lost} | {verdict} |"
+    )
 
 
 def report(steps: list[Step], args: argparse.Namespace, load: str) -> str:
@@ -420,14 +438,16 @@ def report(steps: list[Step], args: argparse.Namespace, load: str) -> str:
         "the message period, as independent capture systems would.",
         f"Command: `.venv/bin/python -m bench.bench_live --servers {args.servers} --counts "
         f"{args.counts} --seconds {args.seconds:g} --batch {args.batch} --processes "
-        f"{args.processes} --frames {args.frames}{' --proxy' if args.proxy else ''}`.",
+        f"{args.processes} --frames {args.frames} --fps {args.fps:g}"
+        f"{' --proxy' if args.proxy else ''}"
+        f"{f' --server-cpus {args.server_cpus}' if args.server_cpus else ''}`.",
         "",
-        f"Each client streams {args.seconds:g} s of a 120 Hz recording (UI-PRMD "
-        f"`{SESSION}` resampled) at 120 frames/s to its own live session, one frame or a batch "
-        "of frames per message; latency is frame due → position event received for the "
-        "frames the aligner answers (every fourth: the exercise model runs at 30 frames/s), "
-        "counted from when the first frame of the frame's message was due, so a batch's wait "
-        "for its last frame is in it (2 frame times, 17 ms, for 3 frames at 120 frames/s). "
+        f"Each client streams {args.seconds:g} s of a {args.fps:g} Hz recording (UI-PRMD "
+        f"`{SESSION}` resampled) at {args.fps:g} frames/s to its own live session, one frame or "
+        "a batch of frames per message; latency is frame due → position event received for "
+        "the frames the aligner answers (those at the exercise model's 30 frames/s: every "
+        "fourth at 120 frames/s), counted from when the first frame of the frame's message was "
+        "due, so a batch's wait for its last frame is in it (two frame times for 3 frames). "
         "From the message sent: the same without that wait. In the consumer: message received "
         "→ position event sent, measured by the server (queueing before the consumer is not "
         "in it). Server processor time: user + system time of the server processes per frame "
@@ -608,7 +628,12 @@ def main(argv: list[str] | None = None) -> None:
         "--proxy", action="store_true",
         help="also through docker-compose's nginx proxy in front of 2 processes (redis, uvicorn)",
     )  # fmt: skip
+    parser.add_argument(
+        "--server-cpus", default="",
+        help="cores for the server processes, e.g. 1; the clients then run on the other cores",
+    )  # fmt: skip
     args = parser.parse_args(argv)
+    server_cpus = pin_clients_away(args.server_cpus)
     if args.aligner:
         aligner_times()
     if args.stages:
@@ -628,7 +653,7 @@ def main(argv: list[str] | None = None) -> None:
             for batch, processes, proxy in configurations(kind, args):
                 ctxs = [
                     Context(env, world, recording_120(args.seconds, args.fps, batch, binary),
-                            args.fps, folder, processes, proxy)
+                            args.fps, folder, processes, proxy, server_cpus)
                     for binary in (form == "binary" for form in args.frames.split(","))
                 ]  # fmt: skip
                 steps += grow(kind, ctxs, [int(v) for v in args.counts.split(",")])
@@ -636,6 +661,19 @@ def main(argv: list[str] | None = None) -> None:
     print(text)
     if args.markdown:
         args.markdown.write_text(text + "\n", encoding="utf-8")
+
+
+def pin_clients_away(server_cpus: str) -> set[int] | None:
+    """The server's cores from ``--server-cpus`` ("1", "0,1"; empty: none), with this process,
+    which runs the clients, pinned to the machine's other cores."""
+    if not server_cpus:
+        return None
+    cores = {int(v) for v in server_cpus.split(",")}
+    others = os.sched_getaffinity(0) - cores
+    if not others:
+        raise SystemExit("--server-cpus leaves no core for the clients")
+    os.sched_setaffinity(0, others)
+    return cores
 
 
 def configurations(kind: str, args: argparse.Namespace) -> list[tuple[int, int, bool]]:

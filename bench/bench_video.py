@@ -3,10 +3,14 @@
 Timing: the video (default the squat fixture, 20.5 s) is looped into a temporary file of
 ``--seconds`` (60 s: 1,798 frames at 29.97 fps; written outside the timing), then each run reads
 it as the worker reads an uploaded video (`analysis.sources.video.read_video`: MediaPipe Pose on
-every frame, one slice of the video per core, then the skeleton solved) and analyses it against
+every frame read, one slice of the video per core, then the skeleton solved) and analyses it against
 a squat exercise (`analysis.pipeline.analyse`, the model built from the fixture's reference
 outside the timing).
-The figure is wall time / video duration (target ≤ 0.5: a 60 s video in ≤ 30 s).
+The figure is wall time / video duration (target ≤ 0.5: a 60 s video in ≤ 30 s), with the
+processor time (all threads) of reading and of analysing: divided by the duration and the cores,
+the wall time the run would take on cores nobody else uses. Several ``--model`` and
+``--read-fps`` (frames a second given to MediaPipe, `analysis.sources.video.READ_FPS` by
+default) are timed in turn, run after run, so that they share the machine's load alike.
 
 Comparison (``--compare``): each given video read with the lite and with the full landmark model
 : frames with a person, repetitions and their bottoms (against the squat exercise), the knees'
@@ -16,7 +20,7 @@ the sliced reading is from reading the video in one slice (as before slicing). W
 hip angles are also compared with the ones that recording gives: mean absolute difference.
 
     .venv/bin/python -m bench.bench_video [--video PATH] [--seconds 60] [--runs 3]
-                                          [--model full|lite]
+                                          [--model full|lite ...] [--read-fps 30 ...]
     .venv/bin/python -m bench.bench_video --compare VIDEO [VIDEO ...] [--truth TRC]
 """
 
@@ -28,6 +32,7 @@ import os
 import statistics
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -35,11 +40,17 @@ import numpy as np
 from analysis.bvh import Motion, read
 from analysis.bvh.errors import AnalysisInputError
 from analysis.clinical import angle_series, clinical_angles
-from analysis.pipeline import analyse, build_model
+from analysis.pipeline import FittedModel, analyse, build_model
 from analysis.sources import read_recording
 from analysis.sources.mediapipe import motion_from_landmarks
 from analysis.sources.pose_tracking import libraries
-from analysis.sources.video import DEFAULT_MODEL, landmarks_from_video, probe, read_video
+from analysis.sources.video import (
+    DEFAULT_MODEL,
+    READ_FPS,
+    landmarks_from_video,
+    probe,
+    read_video,
+)
 from tests.analysis.fixtures.capture.make_squat_reference import (
     KEY_POSE_FRAMES,
     KEY_POSE_TYPES,
@@ -72,47 +83,75 @@ def looped(source: Path, seconds: float, target: Path) -> Path:
     return target
 
 
-def one_run(path: Path, model: object, pose_model: str) -> tuple[float, float, float, int]:
-    """Wall seconds to read the video and to analyse it, the process's CPU seconds for both
-    (all threads), repetitions found."""
+@dataclass(frozen=True)
+class Run:
+    """One reading and analysis of the video: wall and processor seconds (all threads) of each
+    step, repetitions found."""
+
+    read_wall: float
+    read_cpu: float
+    analyse_wall: float
+    analyse_cpu: float
+    repetitions: int
+
+    @property
+    def wall(self) -> float:
+        return self.read_wall + self.analyse_wall
+
+    @property
+    def cpu(self) -> float:
+        return self.read_cpu + self.analyse_cpu
+
+
+def one_run(path: Path, model: FittedModel, pose_model: str, read_fps: float) -> Run:
     cpu, start = time.process_time(), time.perf_counter()
-    recording = read_video(path, model=pose_model)
-    read_s = time.perf_counter() - start
+    recording = read_video(path, model=pose_model, read_fps=read_fps)
+    read_cpu, read_wall = time.process_time() - cpu, time.perf_counter() - start
+    cpu, start = time.process_time(), time.perf_counter()
     result = analyse(recording.motion, model).summary
-    wall = time.perf_counter() - start
-    return read_s, wall - read_s, time.process_time() - cpu, len(result.repetitions)
+    analyse_cpu, analyse_wall = time.process_time() - cpu, time.perf_counter() - start
+    return Run(read_wall, read_cpu, analyse_wall, analyse_cpu, len(result.repetitions))
 
 
 def timing(args: argparse.Namespace) -> None:
     squat = build_model(read(REFERENCE), list(KEY_POSE_FRAMES), list(KEY_POSE_TYPES))
+    cores = len(os.sched_getaffinity(0))
+    configs = [(m, f) for m in args.model for f in args.read_fps]
     with tempfile.TemporaryDirectory() as tmp:
         path = looped(args.video, args.seconds, Path(tmp) / "looped.mp4")
         header = probe(path)
         duration = header.frames / header.fps
-        load0 = os.getloadavg()[0]
-        runs = [one_run(path, squat, args.model) for _ in range(args.runs)]
-    total = statistics.median(r + a for r, a, _, _ in runs)
-    cpu = statistics.median(c for _, _, c, _ in runs)
-    print(
-        f"## Phone video ({dt.date.today().isoformat()}, {os.cpu_count()} cores, load average "
-        f"{load0:.2f} before, {os.getloadavg()[0]:.2f} after)\n\n"
-        f"{args.video.name} looped to {duration:.1f} s ({header.frames} frames, "
-        f"{header.width}×{header.height}, {header.fps:.2f} fps), {args.model} model, "
-        f"{args.runs} runs\n"
-    )
-    for k, (r, a, c, reps) in enumerate(runs):
         print(
-            f"run {k + 1}: read {r:.1f} s + analyse {a:.2f} s = {r + a:.1f} s wall, "
-            f"{c:.1f} s CPU, {reps} repetitions"
+            f"## Phone video ({dt.datetime.now(dt.UTC):%Y-%m-%d %H:%M} UTC, {cores} cores, "
+            f"load average {os.getloadavg()[0]:.2f} at the start)\n\n"
+            f"{args.video.name} looped to {duration:.1f} s ({header.frames} frames, "
+            f"{header.width}×{header.height}, {header.fps:.2f} fps), {args.runs} runs of each "
+            "model and reading rate, interleaved\n"
         )
-    ratio = total / duration
-    verdict = "met" if ratio <= 0.5 else "MISSED"
-    print(
-        f"\nmedian {total:.1f} s wall = {ratio:.2f} of the video's duration (target ≤ 0.5: "
-        f"{verdict}); CPU {cpu:.1f} s = {cpu / duration:.2f} core-seconds per second of video "
-        f"({cpu / duration / len(os.sched_getaffinity(0)):.2f} of the duration if every core "
-        "were free)"
-    )
+        runs: dict[tuple[str, float], list[Run]] = {c: [] for c in configs}
+        for k in range(args.runs):
+            for config in configs:
+                run = one_run(path, squat, *config)
+                runs[config].append(run)
+                print(
+                    f"run {k + 1}, {config[0]} model, read at {config[1]:g} fps: read "
+                    f"{run.read_wall:.1f} s wall / {run.read_cpu:.1f} s CPU, analyse "
+                    f"{run.analyse_wall:.2f} s wall / {run.analyse_cpu:.2f} s CPU, "
+                    f"{run.repetitions} repetitions (load {os.getloadavg()[0]:.1f})",
+                    flush=True,
+                )
+    print()
+    for (pose_model, read_fps), done in runs.items():
+        wall = statistics.median(r.wall for r in done)
+        cpu = statistics.median(r.cpu for r in done)
+        verdict = "met" if wall / duration <= 0.5 else "MISSED"
+        print(
+            f"- {pose_model}, read at {read_fps:g} fps: median {wall:.1f} s wall = "
+            f"{wall / duration:.2f} of the duration (target ≤ 0.5: {verdict}); CPU {cpu:.1f} s "
+            f"({statistics.median(r.analyse_cpu for r in done):.2f} s of it analysing) = "
+            f"{cpu / duration / cores:.2f} of the duration if every core were free"
+        )
+    print(f"\nload average at the end {os.getloadavg()[0]:.2f}")
 
 
 def compare(videos: list[Path], truth: Path | None) -> None:
@@ -125,7 +164,7 @@ def compare(videos: list[Path], truth: Path | None) -> None:
             seen[label] = landmarks_from_video(video, model=model, workers=workers)
             took = time.perf_counter() - start
             lm = seen[label]
-            motion = motion_from_landmarks(lm.world, lm.header.fps, lm.found).motion
+            motion = motion_from_landmarks(lm.world, lm.fps, lm.found).motion
             _describe(label, motion, lm.found, took, squat)
             if truth is not None and lm.header.frames == _frames_of(truth):
                 _against_truth(label, motion, truth)
@@ -183,7 +222,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--video", type=Path, default=VIDEO)
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--model", choices=("lite", "full"), default=DEFAULT_MODEL)
+    parser.add_argument("--model", choices=("lite", "full"), nargs="+", default=[DEFAULT_MODEL])
+    parser.add_argument(
+        "--read-fps", type=float, nargs="+", default=[READ_FPS], help="frames a second read"
+    )
     parser.add_argument("--compare", type=Path, nargs="+", help="compare lite and full on these")
     parser.add_argument("--truth", type=Path, help="a .trc of the compared video's movement")
     args = parser.parse_args(argv)

@@ -11,10 +11,14 @@ analysed again: it must be told "does not look like" again and pass no repetitio
 message names two exercises ("It looks more like A or B": both as near), the session is moved to
 each of them; the figures say how often the session's own exercise is among those named.
 
-    python -m bench.eval_mismatch [--jobs 2] [--subjects s02 s03] [--markdown FILE.md]
+    python -m bench.eval_mismatch [--jobs 2] [--subjects s02 s03] [--exercises m05 m07]
+                                  [--markdown FILE.md]
 
-``--subjects`` runs a subset (each subject's 20 sessions against every model, about a seventh of
-the full run) while a threshold is tried.
+``--subjects`` and ``--exercises`` run a subset (the sessions of those subjects, or of those
+exercises, still against every model) while a threshold is tried. Every pair of a session and
+another exercise that passes a repetition is listed with the fit check's distance ratio (this
+exercise's distance over the nearest of the clinic's other exercises: above 1, another exercise
+is nearer; the check refuses above ``MatchOptions.margin``).
 """
 
 from __future__ import annotations
@@ -29,8 +33,9 @@ from collections import Counter
 from pathlib import Path
 
 from analysis.bvh import Motion, read
+from analysis.kinematics import kinematics
 from analysis.pipeline import FittedModel, analyse, build_model
-from analysis.pipeline.match import Candidate, MatchContext, features_of
+from analysis.pipeline.match import Candidate, MatchContext, features_of, rank
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "ui-prmd"
 EXERCISES = [f"m{k:02d}" for k in range(1, 11)]
@@ -56,7 +61,8 @@ def load_models() -> None:
         CONTEXTS[exercise] = MatchContext(NAMES[exercise], others)
 
 
-Row = tuple[str, str, str, str | None, tuple[str, ...]]
+# session, model exercise, outcome, looks_like, every exercise named, repetitions passed of found
+Row = tuple[str, str, str, str | None, tuple[str, ...], tuple[int, int]]
 
 
 def named(message: str) -> tuple[str, ...]:
@@ -71,18 +77,30 @@ def named(message: str) -> tuple[str, ...]:
 
 
 def judged(session: str, exercise: str, motion: Motion) -> Row:
-    """(session, model exercise, outcome, looks_like, every exercise named) of one analysis."""
+    """(session, model exercise, outcome, looks_like, every exercise named, (repetitions
+    passed, found)) of one analysis."""
     try:
         summary = analyse(motion, MODELS[exercise], match=CONTEXTS[exercise]).summary
     except Exception as error:  # counted: the figure the issue asks for
-        return session, exercise, f"crash {type(error).__name__}", None, ()
+        return session, exercise, f"crash {type(error).__name__}", None, (), (0, 0)
     if not summary.match.fits:
         kind = "does not fit"
     elif not any(r.passed for r in summary.repetitions):
         kind = "passes none"
     else:
         kind = "passes some"
-    return session, exercise, kind, summary.match.looks_like, named(summary.match.message)
+    passed = sum(bool(r.passed) for r in summary.repetitions)
+    counts = (passed, len(summary.repetitions))
+    return session, exercise, kind, summary.match.looks_like, named(summary.match.message), counts
+
+
+def distance_ratio(session: str, exercise: str) -> float:
+    """The fit check's ratio for a session against an exercise: that exercise's distance over the
+    nearest of the clinic's other exercises (`analysis.pipeline.match.Ranking.nearer`; UI-PRMD
+    sessions share the tutors' skeleton and frame rate, so the take is compared as read)."""
+    motion = read(DATA / "sessions" / f"{session}.bvh.gz")
+    ranking = rank(motion, MODELS[exercise], CONTEXTS[exercise].candidates, kinematics(motion))
+    return float("nan") if ranking is None else ranking.nearer()
 
 
 def outcome(session: str) -> list[Row]:
@@ -98,10 +116,10 @@ def moved(pair: tuple[str, str]) -> Row:
     return judged(session, exercise, read(DATA / "sessions" / f"{session}.bvh.gz"))
 
 
-def run(jobs: int, subjects: list[str]) -> tuple[list[Row], list[Row]]:
-    """Every session against every model, then each one said to look like another exercise
-    than its own, against that one."""
-    sessions = [f"{e}_{s}_{label}" for e in EXERCISES for s in subjects
+def run(jobs: int, subjects: list[str], exercises: list[str]) -> tuple[list[Row], list[Row]]:
+    """Every session (of ``subjects`` and ``exercises``) against every model, then each one said
+    to look like another exercise than its own, against that one."""
+    sessions = [f"{e}_{s}_{label}" for e in exercises for s in subjects
                 for label in ("correct", "incorrect")]  # fmt: skip
     if jobs <= 1:
         rows = [row for s in sessions for row in outcome(s)]
@@ -142,6 +160,21 @@ def moved_lines(rows: list[Row], again: list[Row]) -> list[str]:
             f"{', '.join(sessions) or 'none'}.",
         ]
     return lines
+
+
+def passing_lines(rows: list[Row]) -> list[str]:
+    """Each pair of a session and an exercise not its own that passes a repetition, with the
+    fit check's distance ratio there (a session moved there is the same pair, analysed alike)."""
+    lines = []
+    for r in rows:
+        if r[0][:3] != r[1] and r[2] == "passes some":
+            passed, found = r[5]
+            lines.append(
+                f"- {r[0]} as {r[1]} {NAMES[r[1]]}: distance ratio "
+                f"{distance_ratio(r[0], r[1]):.3f}, {passed} of {found} repetitions passed"
+            )
+    head = "Pairs of a session and an exercise that is not its own passing a repetition:"
+    return ["", head, "", *lines] if lines else ["", f"{head} none."]
 
 
 def tables(rows: list[Row], seconds: float) -> list[str]:
@@ -190,11 +223,13 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--markdown", type=Path, help="write the docs section here")
     parser.add_argument("--subjects", nargs="*", default=SUBJECTS, help="a subset, e.g. s02")
+    parser.add_argument("--exercises", nargs="*", default=EXERCISES, help="a subset, e.g. m05")
     args = parser.parse_args()
     start = time.perf_counter()
     load_models()
-    rows, again = run(args.jobs, args.subjects)
+    rows, again = run(args.jobs, args.subjects, args.exercises)
     lines = tables(rows, time.perf_counter() - start) + moved_lines(rows, again)
+    lines += passing_lines(rows)
     print("\n".join(lines))
     if args.markdown:
         args.markdown.write_text(section(lines), encoding="utf-8")

@@ -9,6 +9,9 @@ its pass threshold).
     python -m bench.eval_recorders [--jobs 1] [--exercises m01,m04] [--subjects s01]
         [--models kinect,vicon]
     python -m bench.eval_recorders --keraal     # the KERAAL samples' counts and angles
+
+Candidate scoring features are tried on these pairs in minutes with
+`bench/eval_recorder_candidates.py`.
 """
 
 from __future__ import annotations
@@ -69,9 +72,14 @@ def kinect_model(exercise: str) -> FittedModel:
 
 
 def vicon_model(exercise: str) -> FittedModel:
-    """The Vicon take of s01's correct session, its key poses the Kinect session's carried over:
-    each repetition's starts from the Vicon labels, the other key poses at the same share of the
-    repetition as in the Kinect take."""
+    """The Vicon take of s01's correct session with `vicon_key_poses`."""
+    return build_model(*vicon_key_poses(exercise))
+
+
+def vicon_key_poses(exercise: str) -> tuple[Motion, list[int], list[int]]:
+    """The Vicon take of s01's correct session and its key poses, the Kinect session's carried
+    over: each repetition's starts from the Vicon labels, the other key poses at the same share
+    of the repetition as in the Kinect take."""
     take = f"{exercise}_s01_correct"
     row = vicon_rows()[take]
     frames, types = marks()[f"sessions/{take}.bvh.gz"]
@@ -87,7 +95,7 @@ def vicon_model(exercise: str) -> FittedModel:
         share = (frame - starts_k[k]) / span_k
         mapped.append(round(starts_v[k] + share * (starts_v[k + 1] - starts_v[k])))
     mapped = [min(max(f, 0), motion.n_frames - 1) for f in mapped]
-    return build_model(motion, mapped, types)
+    return motion, mapped, types
 
 
 def judged(motion: Motion, model: FittedModel) -> tuple[int, float, bool]:

@@ -19,22 +19,39 @@ def _prepared_data_folders(tmp_path_factory):
     LocalServer.prepared_root = root / "prepared"
 
 
-# The test files that take longest, longest first (`pytest -n 0 --durations`, 2026-11-29): `make
-# test` hands them out first, so that no worker is left alone with one of them at the end.
+# The test files that take longest, longest first (`pytest -n 0 --durations`, 2026-11-29; the
+# files outside tests/e2e by the processor time of their tests and the processes they start, see
+# docs/PERFORMANCE.md): `make test` hands them out first, so that no worker is left alone with
+# one of them at the end.
 SLOWEST_FIRST = (
     "tests/e2e/test_camera_page.py",
     "tests/e2e/test_capture_sources.py",
     "tests/e2e/test_upload_flow.py",
     "tests/e2e/test_page_widths.py",
     "tests/e2e/test_one_pass_count.py",
+    "tests/webapp/test_permissions.py",
+    "tests/analysis/test_every_pair.py",
+    "tests/analysis/test_hostile_files.py",
+    "tests/webapp/test_upload_fuzz.py",
+    "tests/analysis/test_pipeline.py",
+    "tests/webapp/test_backup.py",
+    "tests/analysis/test_cli.py",
+    "tests/analysis/test_bvh_fuzz.py",
+    "tests/analysis/test_dtw.py",
+    "tests/webapp/test_exercise_sources.py",
+    "tests/analysis/test_cli_without_network.py",
+    "tests/analysis/test_judgement.py",
+    "tests/webapp/test_no_third_party.py",
 )
+# Browser tests, tests marked slow and tests that start real worker processes come next.
+LONG_MARKS = ("e2e", "slow", "integration")
 
 
 def file_rank(path: str, items: list[pytest.Item]) -> tuple[int, int, int]:
-    """Listed files in their order, then browser and slow-marked files, then the rest with the
-    most tests first (what xdist's own order would be)."""
+    """Listed files in their order, then files with a long mark, then the rest with the most
+    tests first (what xdist's own order would be)."""
     listed = SLOWEST_FIRST.index(path) if path in SLOWEST_FIRST else len(SLOWEST_FIRST)
-    marked = any(item.get_closest_marker(name) for item in items for name in ("e2e", "slow"))
+    marked = any(item.get_closest_marker(name) for item in items for name in LONG_MARKS)
     return listed, 0 if marked else 1, -len(items)
 
 

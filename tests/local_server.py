@@ -1,10 +1,10 @@
 """Start the site the way `make run` does, on a free port with a fresh data folder.
 
-`make run` migrates and runs ``python -m workers.local --demo`` (the demo clinic loaded, then the
-server and a real Celery worker on the filesystem broker). `LocalServer` does the same in a folder
-of its own, so browser tests and `bench/bench_upload.py` exercise the real background worker,
-never eager tasks; only its demo is analysed before the server starts (`load_demo --wait`), so
-tests find it analysed. Only tests and benchmarks use it.
+`make run` runs ``python -m workers.local --demo`` (the server migrates and loads the demo clinic,
+then serves; a real Celery worker on the filesystem broker beside it). `LocalServer` does the same
+in a folder of its own, so browser tests and `bench/bench_upload.py` exercise the real background
+worker, never eager tasks; only its demo is analysed before the server starts (`load_demo --wait`),
+so tests find it analysed. Only tests and benchmarks use it.
 
 Under pytest, `LocalServer.prepared_root` (set by tests/conftest.py) makes migrating and loading
 the demo a once-per-run cost: the first server of each kind prepares a folder under a lock shared

@@ -16,9 +16,12 @@ analysed:
   this machine, so no HTTPS redirect or secure-only cookies. ``DEBUG=1`` (or any of these set in
   the environment) wins; with DEBUG on, runserver also reloads itself when the code changes.
 
-With ``--demo`` (`make run`) it first loads the demo clinic (``manage.py load_demo``) in the same
-environment, so the demo's analyses go to the worker's queue: the page is up in seconds and the
-demo's recordings show as being analysed, as any upload does, until the worker is done.
+With ``--demo`` (`make run`) the server is ``manage.py serve_demo``: in the server's own process,
+with the same environment, the migrations are applied and the demo clinic is loaded before it
+serves (one start-up of the site's code, not three), so the demo's analyses go to the worker's
+queue: the page is up as soon as the server is, and the demo's recordings show as being analysed,
+as any upload does, until the worker is done. The worker then starts once the server answers on
+its port (the database is ready by then), and does not compete with the server's start-up.
 
 Both get ``LOCAL_BROKER_DIR`` (``DATA_DIR/broker``): the settings then use kombu's filesystem
 transport, one file per message in that folder, and no eager execution, so an upload returns as
@@ -44,6 +47,7 @@ import contextlib
 import os
 import secrets
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -125,10 +129,25 @@ def worker_command(env: Mapping[str, str]) -> list[str]:
     ]  # fmt: skip
 
 
-def server_command(address: str, *, reload: bool = True) -> list[str]:
+def server_command(address: str, *, reload: bool = True, demo: bool = False) -> list[str]:
+    """runserver; with ``demo``, `serve_demo` (migrations and the demo clinic first)."""
     # Without the reloader the server is one process, which dies with the launcher.
     options = [] if reload else ["--noreload"]
-    return [sys.executable, str(ROOT / "manage.py"), "runserver", *options, address]
+    command = "serve_demo" if demo else "runserver"
+    return [sys.executable, str(ROOT / "manage.py"), command, *options, address]
+
+
+def answers(address: str) -> bool:
+    """Something accepts connections at runserver's ``address`` ("[host:]port")."""
+    host, _, port = address.rpartition(":")
+    host = host.strip("[]")
+    # A server on every interface answers on loopback too.
+    host = {"": "127.0.0.1", "0": "127.0.0.1", "0.0.0.0": "127.0.0.1", "::": "::1"}.get(host, host)
+    try:
+        with socket.create_connection((host, int(port)), timeout=1.0):
+            return True
+    except OSError:
+        return False
 
 
 def start(command: Sequence[str], env: Mapping[str, str]) -> subprocess.Popen[bytes]:
@@ -159,17 +178,19 @@ def signal_group(process: subprocess.Popen[bytes], signum: int) -> None:
         os.killpg(process.pid, signum)
 
 
-def stop_all(server: subprocess.Popen[bytes], worker: subprocess.Popen[bytes]) -> None:
-    """SIGTERM to the server's group and to the worker (which stops its pool, ending its task
-    first), up to ``STOP_SECONDS`` for both, then SIGKILL to both groups: nothing outlives this."""
+def stop_all(server: subprocess.Popen[bytes], worker: subprocess.Popen[bytes] | None) -> None:
+    """SIGTERM to the server's group and to the worker if started (which stops its pool, ending
+    its task first), up to ``STOP_SECONDS`` for both, then SIGKILL to both groups: nothing
+    outlives this."""
+    started = [process for process in (server, worker) if process is not None]
     signal_group(server, signal.SIGTERM)
-    if worker.poll() is None:
+    if worker is not None and worker.poll() is None:
         worker.terminate()
     deadline = time.monotonic() + STOP_SECONDS
-    for process in (server, worker):
+    for process in started:
         with contextlib.suppress(subprocess.TimeoutExpired):
             process.wait(timeout=max(0.0, deadline - time.monotonic()))
-    for process in (server, worker):
+    for process in started:
         signal_group(process, signal.SIGKILL)
         process.wait()
 
@@ -183,34 +204,39 @@ def say(message: str) -> None:
     print(f"workers.local: {message}", file=sys.stderr, flush=True)
 
 
-def demo_command() -> list[str]:
-    return [sys.executable, str(ROOT / "manage.py"), "load_demo"]
-
-
 def serve(address: str, env: Mapping[str, str], *, demo: bool = False) -> int:
     """Run the worker and the server until the server ends or this process is told to stop;
-    with ``demo``, load the demo clinic first (its analyses queued for the worker)."""
+    with ``demo``, the server migrates and loads the demo clinic first (its analyses queued for
+    the worker), and the worker starts once the server answers."""
     env = local_env(env)
-    if demo:
-        subprocess.run(demo_command(), env=env, cwd=ROOT, check=True)
-    server = server_command(address, reload=debug_on(env))
-    return supervise(worker_command(env), server, env)
+    server = server_command(address, reload=debug_on(env), demo=demo)
+    return supervise(worker_command(env), server, env, worker_after=address if demo else None)
 
 
 def supervise(
-    worker_argv: Sequence[str], server_argv: Sequence[str], env: Mapping[str, str]
+    worker_argv: Sequence[str],
+    server_argv: Sequence[str],
+    env: Mapping[str, str],
+    *,
+    worker_after: str | None = None,
 ) -> int:
-    """Keep a worker beside the server (restarted when it ends); returns the exit code."""
-    return Supervisor(worker_argv, server_argv, env).run()
+    """Keep a worker beside the server (restarted when it ends); returns the exit code. With
+    ``worker_after`` (the server's address) the worker starts once the server answers there."""
+    return Supervisor(worker_argv, server_argv, env, worker_after).run()
 
 
 class Supervisor:
     """The server and the worker now running (a restarted one, after a death)."""
 
     def __init__(
-        self, worker_argv: Sequence[str], server_argv: Sequence[str], env: Mapping[str, str]
+        self,
+        worker_argv: Sequence[str],
+        server_argv: Sequence[str],
+        env: Mapping[str, str],
+        worker_after: str | None = None,
     ) -> None:
         self.worker_argv, self.server_argv, self.env = worker_argv, server_argv, env
+        self.worker_after = worker_after
         self.stopping: list[int] = []
 
     def on_signal(self, signum: int, frame: object) -> None:
@@ -218,32 +244,48 @@ class Supervisor:
 
     def run(self) -> int:
         previous = {signum: signal.signal(signum, self.on_signal) for signum in STOP_SIGNALS}
-        self.worker = start(self.worker_argv, self.env)
         self.server = start(self.server_argv, self.env)
+        self.worker: subprocess.Popen[bytes] | None = None
         try:
-            return self.watch()
+            if self.worker_after is not None and not self.server_answers(self.worker_after):
+                return self.ended()
+            self.worker = start(self.worker_argv, self.env)
+            return self.watch(self.worker)
         finally:
             stop_all(self.server, self.worker)
             for signum, handler in previous.items():
                 signal.signal(signum, handler)
 
-    def watch(self) -> int:
+    def server_answers(self, address: str) -> bool:
+        """Wait until the server answers at ``address``; False if it ended or a stop signal
+        came first."""
+        while self.server.poll() is None and not self.stopping:
+            if answers(address):
+                return True
+            time.sleep(0.2)
+        return False
+
+    def ended(self) -> int:
+        """The exit code once a stop signal came or the server ended (said on the terminal)."""
+        if self.stopping:
+            say(f"stopping ({signal.Signals(self.stopping[0]).name})")
+            return 0
+        say(f"the server ended ({ended_how(self.server)}); stopping the worker")
+        return self.server.returncode or 0
+
+    def watch(self, worker: subprocess.Popen[bytes]) -> int:
         """Until the server ends or a stop signal comes: restart the worker when it ends."""
         for restarts in range(WORKER_RESTARTS + 1):
-            while self.server.poll() is None and self.worker.poll() is None and not self.stopping:
+            while self.server.poll() is None and worker.poll() is None and not self.stopping:
                 time.sleep(0.2)
-            if self.stopping:
-                say(f"stopping ({signal.Signals(self.stopping[0]).name})")
-                return 0
-            if self.server.poll() is not None:
-                say(f"the server ended ({ended_how(self.server)}); stopping the worker")
-                return self.server.returncode or 0
-            signal_group(self.worker, signal.SIGKILL)  # what the dead worker left behind
+            if self.stopping or self.server.poll() is not None:
+                return self.ended()
+            signal_group(worker, signal.SIGKILL)  # what the dead worker left behind
             if restarts < WORKER_RESTARTS:
-                say(f"the worker ended ({ended_how(self.worker)}); starting it again")
-                self.worker = start(self.worker_argv, self.env)
-        say(f"the worker ended ({ended_how(self.worker)}) {WORKER_RESTARTS} times; stopping")
-        return self.worker.returncode or 1
+                say(f"the worker ended ({ended_how(worker)}); starting it again")
+                worker = self.worker = start(self.worker_argv, self.env)
+        say(f"the worker ended ({ended_how(worker)}) {WORKER_RESTARTS} times; stopping")
+        return worker.returncode or 1
 
 
 def main(argv: Sequence[str]) -> int:

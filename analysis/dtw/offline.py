@@ -44,24 +44,26 @@ cache-sized row blocks on a second thread while the DP consumes the previous blo
 costs with 16 or more features as one matrix product per block, ``analysis.dtw.cost_blas``),
 a vectorised anti-diagonal sweep for closed unbanded alignments with few features (with or
 without the path, ``analysis.dtw.diagonal_kernels``), two rows of
-memory when no path is wanted, and a batched kernel for many queries against one reference
-(``align_batch`` / ``distance_batch``), one slice of queries per core
-(``analysis.dtw.row_blocks``).
+memory when no path is wanted (with a path and a closed begin, ``kernels.rows_path``: the
+general row without its range tests), and a batched kernel for many queries against one
+reference (``align_batch`` / ``distance_batch``), one slice of queries per core
+(``analysis.dtw.row_blocks``). Closed symmetric Euclidean distances of a batch are pruned
+(``analysis.dtw.pruned``): cells whose accumulated cost exceeds the corner-to-corner path's
+never get local costs, with the same result.
 ``tests/dtw_reference.py`` is the plain version they are tested against.
 """
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
-import numba as nb
 import numpy as np
 import numpy.typing as npt
 
-from analysis.dtw import cost_blas
+from analysis.dtw import cost_blas, pruned
 from analysis.dtw import diagonal_kernels as diag_kern
 from analysis.dtw import kernels as kern
 from analysis.dtw.cost_blas import single_threaded_blas
@@ -75,15 +77,12 @@ from analysis.dtw.frame_costs import (
     joint_weights,
     speed_insensitive_cost,
 )
-from analysis.dtw.row_blocks import pool, run_rows
+from analysis.dtw.row_blocks import concurrently, cuts, run_rows
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 StepKind = Literal["symmetric", "type-v"]
 _DIAGONAL_MAX_DIM = 8  # the anti-diagonal sweep recomputes costs per diagonal: few features only
-# Below this much work (DP cells, plus local-cost work counted as one cell per 16 features) a
-# second thread costs more than it saves: about 2 ms on one core.
-_PARALLEL_MIN_CELLS = 2_000_000
 
 
 @dataclass(frozen=True)
@@ -183,6 +182,7 @@ class DPState:
         self.omega = np.empty(n if omega else 1, np.int64)
         plain = not (options.open_begin or options.path_length_weighting or options.return_matrix)
         self.cost_only = plain and not (path or omega or self.typev)
+        self.path_only = plain and path and not (omega or self.typev)
 
     def rows(self, C: FloatArray, i0: int, i1: int, lo: IntArray, hi: IntArray) -> None:
         """Advance the DP over rows i0..i1-1 whose local costs are C[0 : i1 - i0]."""
@@ -199,6 +199,8 @@ class DPState:
             kern.rows_typev(*head, self.D, *tail)
         elif self.cost_only:
             kern.rows_cost(C, i0, i1, lo, hi, self.D)
+        elif self.path_only:
+            kern.rows_path(C, i0, i1, lo, hi, self.D, self.dirs)
         else:
             kern.rows_symmetric(*head, bool(self.opt.path_length_weighting), self.D, self.L, *tail)
 
@@ -326,6 +328,9 @@ def _run_batch(
     poffs = np.concatenate([[0], np.cumsum(np.diff(offsets) + m)]).astype(np.int64)
     r = _Batch(frames, ya, np.empty(B), np.empty((int(poffs[-1]) if paths else 1, 2), np.int64),
                poffs, np.zeros(B, np.int64))  # fmt: skip
+    if not paths and _prunable(opt, ci):
+        pruned.batch_distances(ci, offsets, lo, hi, r.costs)
+        return _checked(r)
     C = np.empty((N, m))
     flags = (bool(opt.open_begin), bool(opt.open_end), bool(opt.path_length_weighting))
     tail = (r.costs, r.paths, r.lengths)
@@ -335,28 +340,24 @@ def _run_batch(
         ci.rows(r0, r1, lo, hi, C[r0:r1])
         kern.batch(C, offsets, lo, hi, *flags, opt.step == "type-v", paths, poffs, *tail, b0, b1)
 
-    slices = _cuts(B, N * m * (1 + ya.shape[1] // 16))
+    slices = cuts(B, N * m * (1 + ya.shape[1] // 16))
     with single_threaded_blas(ci.uses_blas and N >= cost_blas.MIN_ROWS):
-        _parallel([functools.partial(work, a, b) for a, b in slices])
+        concurrently([functools.partial(work, a, b) for a, b in slices])
+    return _checked(r)
+
+
+def _checked(r: _Batch) -> _Batch:
     if not np.all(np.isfinite(r.costs)):
         bad = int(np.flatnonzero(~np.isfinite(r.costs))[0])
         raise ValueError(f"no admissible warping path for query {bad} with these options")
     return r
 
 
-def _cuts(count: int, work: int) -> list[tuple[int, int]]:
-    """[0, count) in one contiguous slice per worker thread (one slice for small problems)."""
-    workers = min(nb.get_num_threads(), count) if work > _PARALLEL_MIN_CELLS else 1
-    edges = np.linspace(0, count, workers + 1).astype(int)
-    return list(zip(edges[:-1].tolist(), edges[1:].tolist(), strict=True))
-
-
-def _parallel(calls: list[Callable[[], object]]) -> None:
-    """Run GIL-releasing calls concurrently: all but the first in the pool, the first here."""
-    futures = [pool().submit(c) for c in calls[1:]]
-    calls[0]()
-    for f in futures:
-        f.result()
+def _prunable(opt: DTWOptions, ci: CostInputs) -> bool:
+    """Closed symmetric Euclidean distances without path-length weighting: the pruned DP of
+    ``analysis.dtw.pruned`` gives the same sums while skipping the cells off the optimal path."""
+    plain = not (opt.open_begin or opt.open_end or opt.path_length_weighting)
+    return plain and opt.step == "symmetric" and ci.mode in (MODE_EUC, MODE_SQ)
 
 
 def distance_batch(

@@ -13,7 +13,7 @@ import numpy.typing as npt
 
 from analysis.bvh.io import Motion
 from analysis.kinematics import point_kernels
-from analysis.kinematics.forward_kinematics import Kinematics, heading_facing, normalised_positions
+from analysis.kinematics.forward_kinematics import Kinematics, normalised_positions
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -32,10 +32,7 @@ def scaled_positions(
 ) -> FloatArray:
     """Root-relative, heading-normalised positions of ``joints`` over body size: (F, len, 3);
     ``kin``: the motion's `kinematics` when already computed."""
-    if kin is None:
-        points = normalised_positions(motion)
-    else:
-        points = heading_facing(kin.positions, kin.heading)
+    points = normalised_positions(motion) if kin is None else kin.facing
     scale = body_scale(points, motion.skeleton.parents)
     if list(joints) == list(range(points.shape[1])):  # every joint in file order: no gather
         return points / scale

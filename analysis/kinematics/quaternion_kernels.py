@@ -78,6 +78,27 @@ def slerp_between(
 
 
 @numba.njit(cache=True, nogil=True)
+def continuous_in_place(q: FloatArray) -> None:
+    """Sign flips along time so consecutive quaternions lie in the same hemisphere, in place:
+    q (T, M, 4), M series. Each flip is decided on the quaternions as given (the dot product of
+    frame t with frame t − 1 before either is flipped, summed in numpy's order), and a series
+    keeps its sign until the next flip, as `quaternions.make_continuous` defines it."""
+    n_series = q.shape[1]
+    sign = np.ones(n_series)
+    given = q[0].copy()  # frame t − 1 as given
+    for t in range(1, q.shape[0]):
+        for m in range(n_series):
+            dot = q[t, m, 0] * given[m, 0]
+            for k in range(1, 4):
+                dot += q[t, m, k] * given[m, k]
+            if dot < 0.0:
+                sign[m] = -sign[m]
+            for k in range(4):
+                given[m, k] = q[t, m, k]
+                q[t, m, k] *= sign[m]
+
+
+@numba.njit(cache=True, nogil=True)
 def angle_rows(q0: FloatArray, q1: FloatArray) -> FloatArray:
     """Angle (radians, 0..π) of the rotation from q0 to q1 row by row: (N, 4) × 2 → (N,)."""
     out = np.empty(q0.shape[0])

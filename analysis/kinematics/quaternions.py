@@ -80,10 +80,9 @@ def canonical(q: ArrayLike) -> FloatArray:
 def make_continuous(q: ArrayLike, axis: int = 0) -> FloatArray:
     """Flip signs along ``axis`` (time) so consecutive quaternions lie in the same hemisphere."""
     q = np.moveaxis(np.array(q, dtype=np.float64), axis, 0)
-    flips = np.sum(q[1:] * q[:-1], axis=-1) < 0.0
-    sign = np.where(np.cumsum(flips, axis=0) % 2 == 1, -1.0, 1.0)
-    q[1:] *= sign[..., None]
-    return np.moveaxis(q, 0, axis)
+    rows = np.ascontiguousarray(q).reshape(q.shape[0], -1, 4)
+    kernels.continuous_in_place(rows)
+    return np.moveaxis(rows.reshape(q.shape), 0, axis)
 
 
 def rotate(q: ArrayLike, v: ArrayLike) -> FloatArray:

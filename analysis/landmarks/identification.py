@@ -235,10 +235,10 @@ class LandmarkModel(BaseEstimator):
     def identify(self, motion: Motion, kin: Kinematics | None = None) -> Identified:
         """Section 5.4 alone: the signature and the classifier's candidate landmarks (the side
         is chosen by the tutor eigenspace's variance, as `detect` does by default)."""
-        signature, names = self.signature_, motion.skeleton.names
+        signature = self.signature_
         data = signature.read(motion, kin)
-        mirrored = bool(signature.options.mirror and signature.mirrored_data(data, names))
-        sig = signature.project(signature.smoothed_data(data, names, mirrored))
+        smoothed, mirrored = signature.chosen_side(data, motion.skeleton.names)
+        sig = signature.project(smoothed)
         return Identified(self.detector_.candidates(sig), sig, mirrored)
 
     def refine_identified(

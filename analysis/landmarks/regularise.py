@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 import numpy.typing as npt
 
@@ -129,72 +130,121 @@ def pose_costs(distances: FloatArray) -> FloatArray:
     return distances - distances.min(axis=1, keepdims=True)
 
 
-def _bridges(
-    distances: FloatArray, span: tuple[int, int], allowed: npt.NDArray[np.bool_], insert: float
-) -> tuple[FloatArray, npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    """Cost (width, width), type and frame of the best landmark to insert strictly inside ``span``
-    between a landmark of type a (row) and one of type b (column), for a → σ → b allowed: the
-    frame closest to σ's tutor mean, at ``insert`` plus its pose cost."""
+@nb.njit(cache=True, nogil=True)
+def _tempo_cost(gap: float, typical: float, tempo: float, short: float) -> float:
+    """`tempo_costs` of one type pair (the same operations, so the same bits)."""
+    limit = short * typical
+    shortfall = 1.0 - gap / limit if limit > 0 else 0.0
+    return tempo * min(max(shortfall, 0.0), 1.0)
+
+
+@nb.njit(cache=True, nogil=True)
+def _lesser(a: float, b: float) -> float:
+    """``np.minimum`` of two numbers: NaN when either is."""
+    if np.isnan(a) or np.isnan(b):
+        return np.nan
+    return a if a <= b else b
+
+
+@nb.njit(cache=True, nogil=True)
+def _bridges(  # noqa: PLR0917 - numba functions take positional arguments only
+    distances: FloatArray, first: int, last: int, allowed: npt.NDArray[np.bool_], insert: float,
+    cost: FloatArray, kind: IntArray, where: IntArray,
+) -> None:  # fmt: skip
+    """Cost (width, width), type and frame of the best landmark to insert strictly between frames
+    ``first`` and ``last``, between a landmark of type a (row) and one of type b (column), for
+    a → σ → b allowed: the frame closest to σ's tutor mean, at ``insert`` plus its pose cost
+    (`pose_costs`). Written into ``cost`` (inf), ``kind`` and ``where`` (−1) where none."""
     width = allowed.shape[0]
-    cost = np.full((width, width), np.inf)
-    kind = np.full((width, width), -1, dtype=np.int64)
-    where = np.full((width, width), -1, dtype=np.int64)
-    inside = distances[span[0] + 1 : span[1]]
-    if inside.shape[0] == 0:
-        return cost, kind, where
-    at = np.argmin(inside, axis=0)
-    price = insert + pose_costs(inside)[at, np.arange(width)]
+    cost[:] = np.inf
+    kind[:] = -1
+    where[:] = -1
+    if last - first - 1 <= 0:
+        return
     for sigma in range(width):
-        c = np.where(allowed[:, sigma][:, None] & allowed[sigma][None, :], price[sigma], np.inf)
-        better = c < cost
-        cost[better], kind[better], where[better] = c[better], sigma, span[0] + 1 + at[sigma]
-    return cost, kind, where
+        at = first + 1  # np.argmin: the first smallest, the first NaN if any
+        for frame in range(first + 2, last):
+            value = distances[frame, sigma]
+            if np.isnan(distances[at, sigma]):
+                break
+            if value < distances[at, sigma] or np.isnan(value):
+                at = frame
+        lowest = distances[at, 0]  # the frame's smallest distance over types, NaN if any is
+        for t in range(1, width):
+            lowest = _lesser(lowest, distances[at, t])
+        price = insert + (distances[at, sigma] - lowest)
+        for a in range(width):
+            for b in range(width):
+                if allowed[a, sigma] and allowed[sigma, b] and price < cost[a, b]:
+                    cost[a, b], kind[a, b], where[a, b] = price, sigma, at
 
 
-@dataclass
-class _Lattice:
-    """Dynamic-programming state of `regularise`: best[k, t] is the least cost of a sequence whose
+@nb.njit(cache=True, nogil=True)
+def _relax(  # noqa: PLR0917
+    frames: IntArray, cost: FloatArray, distances: FloatArray, allowed: npt.NDArray[np.bool_],
+    weights: FloatArray, gaps: FloatArray, best: FloatArray, back: npt.NDArray[np.int64],
+    j: int, k: int, scratch: tuple[FloatArray, IntArray, IntArray, FloatArray],
+) -> None:  # fmt: skip
+    """Improve best[k] through landmark j kept before k (those between dropped); ``weights``:
+    insert, delete, tempo and short of `GrammarOptions`; ``gaps`` (width, width) or empty."""
+    width = allowed.shape[0]
+    insert, delete, tempo, short = weights[0], weights[1], weights[2], weights[3]
+    via, kind, where, total = scratch
+    first, last = int(frames[j]), int(frames[k])
+    _bridges(distances, first, last, allowed, insert, via, kind, where)
+    paced = gaps.size > 0 and tempo > 0
+    gap = float(last - first)
+    dropped = delete * (k - j - 1)
+    direct = np.empty((width, width))
+    for a in range(width):
+        for b in range(width):
+            direct[a, b] = 0.0 if allowed[a, b] else np.inf
+            if paced:
+                direct[a, b] = direct[a, b] + _tempo_cost(gap, gaps[a, b], tempo, short)
+                # a bridged pair a → σ → b: half the span on each side of the inserted landmark
+                sigma = max(kind[a, b], 0)
+                half = 0.0
+                if kind[a, b] >= 0:
+                    half = _tempo_cost(gap / 2.0, gaps[a, sigma], tempo, short) + _tempo_cost(
+                        gap / 2.0, gaps[sigma, b], tempo, short
+                    )
+                via[a, b] = via[a, b] + half
+            total[a, b] = best[j, a] + _lesser(direct[a, b], via[a, b]) + dropped
+    for b in range(width):
+        src = 0  # np.argmin over the previous type: the first smallest, the first NaN if any
+        for a in range(1, width):
+            if np.isnan(total[src, b]):
+                break
+            if total[a, b] < total[src, b] or np.isnan(total[a, b]):
+                src = a
+        value = total[src, b] + cost[k, b]
+        if value < best[k, b]:
+            bridged = via[src, b] < direct[src, b]
+            best[k, b] = value
+            back[k, b, 0], back[k, b, 1] = j, src
+            back[k, b, 2] = kind[src, b] if bridged else -1
+            back[k, b, 3] = where[src, b] if bridged else -1
+
+
+@nb.njit(cache=True, nogil=True)
+def _lattice(  # noqa: PLR0917
+    frames: IntArray, cost: FloatArray, distances: FloatArray, allowed: npt.NDArray[np.bool_],
+    weights: FloatArray, gaps: FloatArray, lookback: int, best: FloatArray,
+    back: npt.NDArray[np.int64],
+) -> None:  # fmt: skip
+    """The dynamic programme of `regularise`: best[k, t] is the least cost of a sequence whose
     last kept landmark is k with type t; back[k, t] = (previous landmark, its type, inserted
     type, inserted frame), −1 where none."""
-
-    frames: IntArray
-    cost: FloatArray  # (n, width) cost of keeping landmark k as type t
-    distances: FloatArray  # (F, width) from `pose_distances`
-    allowed: npt.NDArray[np.bool_]
-    options: GrammarOptions
-    best: FloatArray
-    back: npt.NDArray[np.int64]
-    gaps: FloatArray | None = None  # (width, width) typical gaps for the tempo prior
-
-
-def _relax(lat: _Lattice, j: int, k: int) -> None:
-    """Improve best[k] through landmark j kept before k (those between dropped)."""
-    width = lat.allowed.shape[0]
-    direct = np.where(lat.allowed, 0.0, np.inf)
-    span = (int(lat.frames[j]), int(lat.frames[k]))
-    via, kind, where = _bridges(lat.distances, span, lat.allowed, lat.options.insert)
-    if lat.gaps is not None and lat.options.tempo > 0:
-        gap = float(span[1] - span[0])
-        direct = direct + tempo_costs(gap, lat.gaps, lat.options)
-        # a bridged pair a → σ → b: half the span on each side of the inserted landmark
-        half = tempo_costs(gap / 2.0, lat.gaps, lat.options)
-        sigma = np.maximum(kind, 0)
-        before, after = np.indices(kind.shape)
-        via = via + np.where(kind >= 0, half[before, sigma] + half[sigma, after], 0.0)
-    total = lat.best[j][:, None] + np.minimum(direct, via) + lat.options.delete * (k - j - 1)
-    src, cols = np.argmin(total, axis=0), np.arange(width)
-    value = total[src, cols] + lat.cost[k]
-    better = value < lat.best[k]
-    bridged = via[src, cols] < direct[src, cols]
-    record = np.column_stack(
-        [
-            np.full(width, j),
-            src,
-            np.where(bridged, kind[src, cols], -1),
-            np.where(bridged, where[src, cols], -1),
-        ]
+    width = allowed.shape[0]
+    scratch = (
+        np.empty((width, width)),
+        np.empty((width, width), np.int64),
+        np.empty((width, width), np.int64),
+        np.empty((width, width)),
     )
-    lat.best[k, better], lat.back[k, better] = value[better], record[better]
+    for k in range(1, frames.size):
+        for j in range(max(0, k - lookback - 1), k):
+            _relax(frames, cost, distances, allowed, weights, gaps, best, back, j, k, scratch)
 
 
 def regularise(
@@ -224,10 +274,10 @@ def regularise(
     cost = pose_costs(distances[landmarks.frames]) + options.retype * retyped
     best = cost + options.delete * np.arange(n)[:, None]  # k as the first kept landmark
     back = np.full((n, width, 4), -1, dtype=np.int64)
-    lat = _Lattice(landmarks.frames, cost, distances, allowed, options, best, back, gaps)
-    for k in range(1, n):
-        for j in range(max(0, k - options.lookback - 1), k):
-            _relax(lat, j, k)
+    weights = np.array([options.insert, options.delete, options.tempo, options.short])
+    typical = np.zeros((0, 0)) if gaps is None else np.ascontiguousarray(gaps, dtype=np.float64)
+    frames = np.ascontiguousarray(landmarks.frames, dtype=np.int64)
+    _lattice(frames, cost, distances, allowed, weights, typical, options.lookback, best, back)
     return _regularised(landmarks, best + options.delete * (n - 1 - np.arange(n))[:, None], back)
 
 

@@ -11,6 +11,7 @@ Data sources: ``"positions"`` (root-relative positions facing a common heading, 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -22,7 +23,6 @@ from sklearn.base import BaseEstimator, TransformerMixin
 from analysis.bvh import Motion
 from analysis.kinematics import Kinematics, kinematics
 from analysis.kinematics import quaternions as quat
-from analysis.kinematics.forward_kinematics import heading_facing
 
 FloatArray = npt.NDArray[np.float64]
 Source = Literal["positions", "quaternions"]
@@ -82,11 +82,12 @@ def mirror_index(names: tuple[str, ...]) -> npt.NDArray[np.int64]:
 
 def motion_data(motion: Motion, source: Source, kin: Kinematics | None = None) -> FloatArray:
     """The motion data of one source before any mirroring: (F, J, 3) root-relative positions
-    facing a common heading (cm) or (F, J, 4) local rotations without sign jumps in time.
-    ``kin``: the motion's `kinematics` when already computed (a pipeline run passes its own)."""
+    facing a common heading (cm, `Kinematics.facing`: read-only) or (F, J, 4) local rotations
+    without sign jumps in time. ``kin``: the motion's `kinematics` when already computed (a
+    pipeline run passes its own)."""
     kin = kinematics(motion) if kin is None else kin
     if source == "positions":
-        return heading_facing(kin.positions, kin.heading)
+        return kin.facing
     q = kin.local_q.copy()
     q[0] = quat.canonical(q[0])
     return quat.make_continuous(q, axis=0)
@@ -97,16 +98,22 @@ def oriented(
     names: tuple[str, ...],
     reference: FloatArray | None = None,
     mirror: bool = False,
+    joints: Sequence[int] | None = None,
 ) -> FloatArray:
     """`motion_data` (positions or quaternions, told apart by the last axis) reflected left↔right
-    when ``mirror`` and, for quaternions, put in ``reference``'s hemisphere."""
+    when ``mirror`` and, for quaternions, put in ``reference``'s hemisphere; ``joints``: only
+    these joints' series (F, len(joints), k), in that order (each joint's values are those it has
+    among all joints: a joint's orientation depends on that joint alone)."""
     quaternions = data.shape[-1] == 4
+    chosen = np.arange(data.shape[1]) if joints is None else np.asarray(joints, dtype=np.int64)
     if mirror:
         flip_axes = [1.0, 1.0, -1.0, -1.0] if quaternions else [-1.0, 1.0, 1.0]
-        data = data[:, mirror_index(names)] * flip_axes
+        data = data[:, mirror_index(names)[chosen]] * flip_axes
+    elif joints is not None:
+        data = data[:, chosen]
     if quaternions and reference is not None:
-        data = data if mirror else data.copy()  # the mirrored data is already a new array
-        flip = np.sum(data.mean(axis=0) * reference, axis=-1) < 0.0
+        data = data if mirror or joints is not None else data.copy()  # else already a new array
+        flip = np.sum(data.mean(axis=0) * reference[chosen], axis=-1) < 0.0
         data[:, flip] *= -1.0
     return data
 
@@ -188,10 +195,9 @@ class MotionSignature(TransformerMixin, BaseEstimator):
     ) -> FloatArray:
         """`smoothed` from already read motion data (`read`) and the performance's joint names."""
         if mirror is None:
-            mirror = self.options.mirror and self.mirrored_data(data, names)
-        series = oriented(data, names, self.reference_, mirror)
-        flat = series[:, list(self.joints_)].reshape(data.shape[0], -1)
-        return smooth(flat, self.window_frames_)
+            return self.chosen_side(data, names)[0]
+        series = oriented(data, names, self.reference_, mirror, self.joints_)
+        return smooth(series.reshape(data.shape[0], -1), self.window_frames_)
 
     def captured(self, smoothed: FloatArray) -> float:
         """Variance of the data (F, p) inside the kept eigenspace, about the data's own mean (the
@@ -207,6 +213,18 @@ class MotionSignature(TransformerMixin, BaseEstimator):
         """`mirrored` from already read motion data."""
         straight = self.captured(self.smoothed_data(data, names, False))
         return self.captured(self.smoothed_data(data, names, True)) > straight
+
+    def chosen_side(self, data: FloatArray, names: tuple[str, ...]) -> tuple[FloatArray, bool]:
+        """The smoothed data (`smoothed_data`) of the side the options choose, and whether it is
+        the mirrored one (`mirrored_data` when the options allow mirroring): each side smoothed
+        once."""
+        straight = self.smoothed_data(data, names, False)
+        if not self.options.mirror:
+            return straight, False
+        flipped = self.smoothed_data(data, names, True)
+        if self.captured(flipped) > self.captured(straight):
+            return flipped, True
+        return straight, False
 
     def fit(
         self, tutor: Motion, y: object = None, kin: Kinematics | None = None

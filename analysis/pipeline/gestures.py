@@ -32,6 +32,7 @@ angular distance of the involved joints' rotations, in degrees.
 from __future__ import annotations
 
 import math
+import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -89,8 +90,11 @@ def usual_pace(paces: Sequence[Pace]) -> Pace | None:
     """The median tempo and reach of some repetitions (None for none)."""
     if not paces:
         return None
+    # statistics' median: numpy's value (the middle one, or the two middle ones' sum halved)
+    # without its array set-up, as a session asks after each of its repetitions
     return Pace(
-        float(np.median([p.tempo for p in paces])), float(np.median([p.reach for p in paces]))
+        float(statistics.median([p.tempo for p in paces])),
+        float(statistics.median([p.reach for p in paces])),
     )
 
 

@@ -21,6 +21,7 @@ import numpy.typing as npt
 
 from analysis import __version__ as code_version
 from analysis.bvh import Motion
+from analysis.dtw.cost_blas import single_threaded_blas
 from analysis.feedback import Grammar, default_grammar
 from analysis.landmarks import KeyPoses
 from analysis.pipeline.model_fit import (
@@ -104,9 +105,10 @@ def build_model(
     names = dict(type_names or {})
     for t in sorted(set(landmark_types)):
         names.setdefault(int(t), "start" if t == 1 else f"key pose {t}")
-    components, involved, report = fit_components(
-        tutor, list(landmark_frames), list(landmark_types), joints, training, on_progress
-    )
+    with single_threaded_blas():  # as in `analyse`: each of the fit's DTW cost blocks only counts
+        components, involved, report = fit_components(
+            tutor, list(landmark_frames), list(landmark_types), joints, training, on_progress
+        )
     text = grammar or default_grammar(list(involved), names)
     rules = Grammar.parse(text)  # a bad grammar fails the build, not every analysis
     key_poses = KeyPoses.of(landmark_frames, landmark_types)

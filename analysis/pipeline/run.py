@@ -31,6 +31,7 @@ import numpy.typing as npt
 from analysis.bvh import Motion
 from analysis.bvh.plausibility import DEFAULT_LIMITS, Limits
 from analysis.clinical import Measured, angle_ranges, measure
+from analysis.dtw.cost_blas import single_threaded_blas
 from analysis.feedback import Comment, LandmarkAssessment
 from analysis.feedback.advice import Advice
 from analysis.pipeline.advice_stage import judge_repetitions
@@ -178,10 +179,13 @@ def analyse(
     usual tempo and reach from an earlier session (`repetition_stage.session_pace`), which
     paper 001's guidance judges this one against as well as against the tutor."""
     timer = StageTimer(on_progress)
-    found = find_repetitions(motion, model, limits, match, timer)
-    scored = score(found, model, (history, own_pace), timer) if found.fit.fits else Scored()
-    measures = measure_recording(found, scored, model, timer)
-    explained = explain(found, measures, scored, model, timer)
+    # BLAS on one thread for the whole analysis: the DTW's cost blocks ask for that limit
+    # hundreds of times a recording, and once it is held each ask only counts
+    with single_threaded_blas():
+        found = find_repetitions(motion, model, limits, match, timer)
+        scored = score(found, model, (history, own_pace), timer) if found.fit.fits else Scored()
+        measures = measure_recording(found, scored, model, timer)
+        explained = explain(found, measures, scored, model, timer)
     if on_progress is not None:
         on_progress("done", 1.0)
     summary = _summary(found, scored, (measures, explained), model, timer)

@@ -65,16 +65,27 @@ def _closest_type(prepared: Prepared, frame: int, types: list[int], model: Fitte
 
 
 def scoring_features(
-    points: FloatArray, start: int, end: int, parts: ModelComponents
+    points: FloatArray,
+    start: int,
+    end: int,
+    parts: ModelComponents,
+    templates: Sequence[FloatArray] | None = None,
 ) -> FloatArray:
     """The features the exercise's scorer scores a repetition by, from frames start..end of the
     recording's (F, J, 3) scaled positions (`scaled_positions`; the tutor's side): the movement
     of the scored joints since the repetition began against the tutor's repetitions. Offline and
-    live (`analysis.live.judged`) alike."""
+    live (`analysis.live.judged`) alike; ``templates``: `scoring_templates` when already made."""
     movement = flatten(np.take(points[start : end + 1], parts.scored_index, axis=1))
-    step = parts.scoring_step
     segment = relative_to_start(movement)
-    return repetition_features(segment[::step], [t[::step] for t in parts.templates])
+    thinned = scoring_templates(parts) if templates is None else templates
+    return repetition_features(segment[:: parts.scoring_step], thinned)
+
+
+def scoring_templates(parts: ModelComponents) -> list[FloatArray]:
+    """The tutor's repetitions at the scoring rate (every ``scoring_step``-th frame), each one
+    array in memory order: made once for all of a recording's repetitions, not once for each
+    repetition and template, as the DTW would copy the strided views every time."""
+    return [np.ascontiguousarray(t[:: parts.scoring_step]) for t in parts.templates]
 
 
 def repetition_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds them)
@@ -91,11 +102,12 @@ def repetition_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds th
     parts = model.components
     threshold = parts.papers.threshold.value
     tutor_frames = float(np.median([len(t) for t in parts.templates]))
+    templates = scoring_templates(parts)
     out = []
     for k, (start, end, peak) in enumerate(
         zip(segments.starts, segments.ends, segments.peaks, strict=True)
     ):
-        features = scoring_features(prepared.points, int(start), int(end), parts)
+        features = scoring_features(prepared.points, int(start), int(end), parts, templates)
         dev = features[: len(parts.scored_index)]
         score = parts.scorer.score(features)
         inside = [a.levels for a in assessment if start < a.frame <= end and a.type != 1]

@@ -9,6 +9,13 @@ and its landmark smoothing has settled (landmarks within a few millimetres of on
 whole video; tracking carries its history, so not bit for bit). The
 frames before the warm-up are only grabbed (decoded, not converted nor tracked); seeking by
 frame number would be faster but lands on the wrong frame in variable-frame-rate phone videos.
+So are the frames between the read ones when only every n-th is read (a 60 fps video at 30).
+
+Where a frame's processor time goes (lite model, docs/PERFORMANCE.md, "Phone video"): about
+two thirds in MediaPipe's network, a tenth in decoding, the rest in MediaPipe's crop of the
+body, colour conversion and Python. Handing MediaPipe a smaller picture saves nothing (it crops
+and scales the body itself) and moves the landmarks; the decoder's thread count changes nothing
+measurable.
 
 Models: the full landmark model ships in the wheel; the lite one is the project's copy in
 ``data/models/`` (see its README), put beside MediaPipe's own when first asked for, since
@@ -24,6 +31,7 @@ import shutil
 import tempfile
 import threading
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -87,32 +95,41 @@ def pose_model(wanted: str = "lite") -> str:
     return "lite"
 
 
-def slices(frames: int, workers: int | None = None) -> list[tuple[int, int | None]]:
-    """Contiguous (start, stop) frame ranges, one per worker; the last reads to the end (the
-    container's frame count can be short)."""
+def slices(frames: int, workers: int | None = None, step: int = 1) -> list[tuple[int, int | None]]:
+    """Contiguous (start, stop) frame ranges, one per worker, each starting on a frame that is
+    read (a multiple of ``step``); the last reads to the end (the container's frame count can be
+    short)."""
     cores = workers or len(os.sched_getaffinity(0))
     count = max(1, min(cores, MAX_SLICES, frames // MIN_SLICE))
-    cuts = [round(k * frames / count) for k in range(count + 1)]
+    cuts = [step * round(k * frames / count / step) for k in range(count + 1)]
     return [(cuts[k], cuts[k + 1] if k + 1 < count else None) for k in range(count)]
 
 
 def track_slices(
-    path: str, frames: int, model: str, progress: Progress | None, workers: int | None = None
+    path: str,
+    frames: int,
+    model: str,
+    progress: Progress | None,
+    *,
+    workers: int | None = None,
+    step: int = 1,
 ) -> tuple[FloatArray, FloatArray, BoolArray]:
-    """(T, 33, 3) world and picture landmarks (NaN where nobody was found) and found (T,);
-    ``model`` as `pose_model` resolves it."""
+    """(T, 33, 3) world and picture landmarks (NaN where nobody was found) and found (T,) of
+    every ``step``-th frame of the video; ``model`` as `pose_model` resolves it."""
     model = pose_model(model)
-    ranges = slices(frames, workers)
+    ranges = slices(frames, workers, step)
     done = [0] * len(ranges)
+    read = -(-frames // step)  # frames given to MediaPipe, for the progress reports
     if len(ranges) == 1:
-        parts = [_track(path, 0, None, model, done, 0, progress, frames)]
+        whole = Slice(0, None, step, model)
+        parts = [_track(path, whole, done, 0, progress=progress, expected=read)]
     else:
         with cf.ThreadPoolExecutor(len(ranges), thread_name_prefix="pose") as pool:
             futures = [
-                pool.submit(_track, path, start, stop, model, done, k, None, frames)
+                pool.submit(_track, path, Slice(start, stop, step, model), done, k)
                 for k, (start, stop) in enumerate(ranges)
             ]
-            _report_while_running(futures, done, frames, progress)
+            _report_while_running(futures, done, read, progress)
             parts = [f.result() for f in futures]
     world, picture, found = (np.concatenate(arrays) for arrays in zip(*parts, strict=True))
     if found.size < 2:
@@ -133,64 +150,85 @@ def _report_while_running(
             last = now
 
 
-def _track(  # noqa: PLR0917 - one slice's whole description, submitted to a pool
+@dataclass(frozen=True)
+class Slice:
+    """Frames ``start`` to ``stop`` (None: the end) of a video, every ``step``-th one through
+    MediaPipe's ``model``."""
+
+    start: int
+    stop: int | None
+    step: int
+    model: str
+
+
+def _track(
     path: str,
-    start: int,
-    stop: int | None,
-    model: str,
+    part: Slice,
     done: list[int],
     slot: int,
-    progress: Progress | None,
-    expected: int,
+    *,
+    progress: Progress | None = None,
+    expected: int = 0,
 ) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """One slice's landmarks; ``done[slot]`` counts its frames read so far; ``progress`` (of the
+    ``expected`` frames) is called from this thread: only when it is the caller's."""
     cv2, mediapipe_pose = libraries()
-    first = max(0, start - WARM_UP)
+    first = max(0, part.start - WARM_UP * part.step)
     capture = cv2.VideoCapture(path)
     try:
         for _ in range(first):
             if not capture.grab():
                 return _empty()
-        end = MAX_FRAMES if stop is None else min(stop, MAX_FRAMES)
+        end = MAX_FRAMES if part.stop is None else min(part.stop, MAX_FRAMES)
         with mediapipe_pose.Pose(
-            static_image_mode=False, model_complexity=COMPLEXITY[model]
+            static_image_mode=False, model_complexity=COMPLEXITY[part.model]
         ) as tracker:
-            rows = _frames(capture, tracker, cv2, end - first, done, slot, progress, expected)
+            reader = _Reader(capture, tracker, cv2, part.step)
+            rows = reader.frames(end - first, done, slot, progress, expected)
     finally:
         capture.release()
     world, picture, found = rows
-    keep = start - first
+    keep = (part.start - first) // part.step
     return world[keep:], picture[keep:], found[keep:]
 
 
-def _frames(  # noqa: PLR0917
-    capture: Any,
-    tracker: Any,
-    cv2: ModuleType,
-    count: int,
-    done: list[int],
-    slot: int,
-    progress: Progress | None,
-    expected: int,
-) -> tuple[FloatArray, FloatArray, BoolArray]:
-    world: list[FloatArray] = []
-    picture: list[FloatArray] = []
-    found: list[bool] = []
-    nowhere = np.full((LANDMARKS, 3), np.nan)
-    while len(found) < count:
-        ok, frame = capture.read()
-        if not ok:
-            break
-        result = tracker.process(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB))
-        seen = result.pose_world_landmarks is not None and result.pose_landmarks is not None
-        world.append(_points(result.pose_world_landmarks) if seen else nowhere)
-        picture.append(_points(result.pose_landmarks) if seen else nowhere)
-        found.append(seen)
-        done[slot] = len(found)
-        if progress is not None and expected > 0 and len(found) % PROGRESS_EVERY == 0:
-            progress(min(1.0, len(found) / expected))
-    if not found:
-        return _empty()
-    return np.stack(world), np.stack(picture), np.array(found, dtype=bool)
+@dataclass
+class _Reader:
+    """A slice's decoder and tracker: every ``step``-th frame to MediaPipe, the others decoded
+    only (decoding must go through every frame; colour conversion and tracking need not)."""
+
+    capture: Any
+    tracker: Any
+    cv2: ModuleType
+    step: int
+
+    def frames(
+        self, count: int, done: list[int], slot: int, progress: Progress | None, expected: int
+    ) -> tuple[FloatArray, FloatArray, BoolArray]:
+        """Landmarks of the next ``count`` frames' read ones; ``done[slot]`` counts them."""
+        world: list[FloatArray] = []
+        picture: list[FloatArray] = []
+        found: list[bool] = []
+        nowhere = np.full((LANDMARKS, 3), np.nan)
+        for index in range(count):
+            if index % self.step:
+                if not self.capture.grab():
+                    break
+                continue
+            ok, frame = self.capture.read()
+            if not ok:
+                break
+            result = self.tracker.process(self.cv2.cvtColor(frame, self.cv2.COLOR_BGR2RGB))
+            seen = result.pose_world_landmarks is not None and result.pose_landmarks is not None
+            world.append(_points(result.pose_world_landmarks) if seen else nowhere)
+            picture.append(_points(result.pose_landmarks) if seen else nowhere)
+            found.append(seen)
+            done[slot] = len(found)
+            if progress is not None and expected > 0 and len(found) % PROGRESS_EVERY == 0:
+                progress(min(1.0, len(found) / expected))
+        if not found:
+            return _empty()
+        return np.stack(world), np.stack(picture), np.array(found, dtype=bool)
 
 
 def _empty() -> tuple[FloatArray, FloatArray, BoolArray]:

@@ -193,11 +193,12 @@ def _text(content: bytes) -> ImportedRecording:
 
 
 def _vicon(rows: list[list[float] | None]) -> ImportedRecording:
-    targets = vicon.read_targets(rows)
+    targets, swapped = vicon.in_chain_order(vicon.read_targets(rows))
     points, _unit = to_metres(vicon.joint_centres(targets), None)
     notes = [
         f"The file gives no times; the targets' usual {vicon.ART_FPS:g} frames per second was "
         "assumed.",
+        *swapped,
         "Joint centres were found as the points that move with both targets they join.",
     ]
     layout = "Vicon ART target text, 17 targets × position and orientation per line"

@@ -8,6 +8,8 @@ the upper arm's target frame and in the forearm's at once, over the whole take).
 barely moves a joint, that fit is pulled towards the midpoint of the two targets (a weak prior),
 so a still leg gets a plausible knee rather than a wild one. The pelvis and the chest are the
 middles of the hip and shoulder centres, as a Kinect places its spine base and spine shoulder.
+A limb whose two middle targets are labelled the other way round (the upper-arm target nearer the
+hand, the forearm's nearer the shoulder) is read with them swapped back (`in_chain_order`).
 """
 
 from __future__ import annotations
@@ -70,6 +72,44 @@ def read_targets(rows: list[list[float] | None]) -> dict[str, tuple[FloatArray, 
         positions[lost] = np.nan
         out[name] = (positions, rotations)
     return out
+
+
+# Each limb's chain of targets, from the trunk's end to the far end: the two middle targets are
+# told apart by which end they are nearer to.
+CHAINS = (
+    *((f"{s} Shoulder", f"{s} Arm", f"{s} Forearm", f"{s} Hand") for s in ("Left", "Right")),
+    *(("Hips", f"{s} Thigh", f"{s} Tibia", f"{s} Foot") for s in ("Left", "Right")),
+)
+
+
+def _distance(a: FloatArray, b: FloatArray) -> float:
+    """Median distance over the frames where both targets are seen (NaN where none are)."""
+    apart = np.linalg.norm(a - b, axis=1)
+    apart = apart[np.isfinite(apart)]
+    return float(np.median(apart)) if apart.size else float("nan")
+
+
+def in_chain_order(
+    targets: dict[str, tuple[FloatArray, FloatArray]],
+) -> tuple[dict[str, tuple[FloatArray, FloatArray]], list[str]]:
+    """The targets with any limb's two middle targets swapped back where the file labels them the
+    other way round (the upper-arm target nearer the hand than the forearm's and farther from the
+    shoulder: KERAAL's ELK and RTK takes label the left arm's so), and a note per swap."""
+    out, notes = dict(targets), []
+    for top, near, far, end in CHAINS:
+        if not {top, near, far, end} <= targets.keys():
+            continue
+        p = {name: targets[name][0] for name in (top, near, far, end)}
+        swapped = _distance(p[top], p[near]) > _distance(p[top], p[far]) and _distance(
+            p[end], p[far]
+        ) > _distance(p[end], p[near])
+        if swapped:
+            out[near], out[far] = targets[far], targets[near]
+            notes.append(
+                f"The {near.lower()} and {far.lower()} targets were labelled the other way round "
+                "(each lies where the other belongs); they were swapped back."
+            )
+    return out, notes
 
 
 def joint_centres(targets: dict[str, tuple[FloatArray, FloatArray]]) -> dict[str, FloatArray]:

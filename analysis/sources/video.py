@@ -34,10 +34,15 @@ SUFFIXES = (".mp4", ".mov", ".webm")
 LEFT_SHOULDER, RIGHT_SHOULDER, LEFT_HIP, RIGHT_HIP = 11, 12, 23, 24
 # Below this share of frames with a person, bridging the gaps would invent the movement.
 MIN_FOUND_SHARE = 0.5
-# The full landmark model for uploads: on the squat fixture a reference made with the lite model
-# counted a third repetition at the video's end, where the full model's counts two (the lite one
-# is a third faster; docs/PERFORMANCE.md, "Phone video").
+# The full landmark model for uploads: the committed squat reference and the stored landmarks the
+# video tests compare with were made with it. The lite one takes about 30 % less processor time
+# per frame and counts the squat video's repetitions alike; what switching needs:
+# docs/PERFORMANCE.md, "Phone video".
 DEFAULT_MODEL = "full"
+# Frames a second given to MediaPipe at most: a 60 fps video is read every other frame. The
+# analysis compares a recording at its exercise's frame rate (30 for the references the site
+# makes), so the frames between add pose estimation time and nothing the analysis uses.
+READ_FPS = 30.0
 
 
 @dataclass(frozen=True)
@@ -47,16 +52,27 @@ class VideoHeader:
     width: int
     height: int
 
+    def step(self, read_fps: float = READ_FPS) -> int:
+        """Read every ``step``-th frame, the step that comes nearest to ``read_fps`` frames a
+        second (with `READ_FPS`: 1 for 25–44 fps videos, 2 for 50 and 60 fps ones)."""
+        return max(1, round(self.fps / read_fps))
+
 
 @dataclass(frozen=True)
 class VideoLandmarks:
     """(T, 33, 3) landmarks in metres in MediaPipe's world frame (the camera's axes: x right,
     y down, z away), moved by where the hips travel in the picture; NaN where ``found`` (T,) is
-    False (no person in that frame)."""
+    False (no person in that frame). One row per frame read: every ``step``-th one."""
 
     world: FloatArray
     found: BoolArray
     header: VideoHeader
+    step: int = 1
+
+    @property
+    def fps(self) -> float:
+        """Frames a second of the landmarks."""
+        return self.header.fps / self.step
 
 
 def probe(path: Path | str) -> VideoHeader:
@@ -70,18 +86,22 @@ def probe(path: Path | str) -> VideoHeader:
 
 
 def read_video(
-    path: Path | str, progress: Progress | None = None, model: str | None = None
+    path: Path | str,
+    progress: Progress | None = None,
+    model: str | None = None,
+    read_fps: float = READ_FPS,
 ) -> ImportedRecording:
     """The recording a video shows; ``progress`` gets the share of frames read (0–1), ``model``
-    is MediaPipe's landmark model, "full" (`DEFAULT_MODEL`) or "lite"."""
-    seen = landmarks_from_video(path, progress, model)
-    solved = motion_from_landmarks(seen.world, seen.header.fps, seen.found)
+    is MediaPipe's landmark model, "full" (`DEFAULT_MODEL`) or "lite"; ``read_fps`` as
+    `landmarks_from_video` takes it."""
+    seen = landmarks_from_video(path, progress, model, read_fps=read_fps)
+    solved = motion_from_landmarks(seen.world, seen.fps, seen.found)
     missing = int((~seen.found).sum())
     notes = [f"No person was found in {missing} frames; they were filled in."] if missing else []
     report = ImportReport(
         "video",
         f"phone video, {seen.header.width}×{seen.header.height} pixels, "
-        f"{seen.header.fps:.0f} frames per second",
+        f"{seen.header.fps:.0f} frames per second" + _read_at(seen),
         tuple(MEDIAPIPE),
         (),
         tuple(notes),
@@ -107,20 +127,32 @@ def landmarks_from_video(
     progress: Progress | None = None,
     model: str | None = None,
     workers: int | None = None,
+    read_fps: float = READ_FPS,
 ) -> VideoLandmarks:
-    """Every frame through MediaPipe Pose (tracking from frame to frame), in one contiguous slice
-    of the video per core (or per ``workers``); ``model`` "full" (`DEFAULT_MODEL`) or "lite",
-    as `pose_model` resolves it."""
+    """Every frame through MediaPipe Pose (tracking from frame to frame), or every n-th one
+    nearest to ``read_fps`` frames a second (every other one of a 60 fps video with
+    `READ_FPS`), in one contiguous slice of the video per core (or per ``workers``); ``model``
+    "full" (`DEFAULT_MODEL`) or "lite", as `pose_model` resolves it."""
     capture = _open(path)
     try:
         header = _header(capture)
     finally:
         capture.release()
+    step = header.step(read_fps)
     world, picture, found = tracking.track_slices(
-        str(path), header.frames, pose_model(model or DEFAULT_MODEL), progress, workers
+        str(path),
+        header.frames,
+        pose_model(model or DEFAULT_MODEL),
+        progress,
+        workers=workers,
+        step=step,
     )
     _check_found(found)
-    return VideoLandmarks(_with_hip_travel(world, picture, header), found, header)
+    return VideoLandmarks(_with_hip_travel(world, picture, header), found, header, step)
+
+
+def _read_at(seen: VideoLandmarks) -> str:
+    return f", analysed at {seen.fps:.0f}" if seen.step > 1 else ""
 
 
 def _open(path: Path | str) -> Any:

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from analysis.dtw import offline as dtw
 from analysis.dtw import row_blocks
-from analysis.dtw.frame_costs import cost_matrix, frame_cost
+from analysis.dtw.frame_costs import CostKind, cost_matrix, frame_cost
 from analysis.dtw.offline import Alignment, DTWOptions, align, band_limits, distance
 from tests import dtw_reference
 
@@ -232,8 +232,72 @@ def test_batch_equals_single(opt: DTWOptions) -> None:
     )
 
 
+@pytest.mark.parametrize("kind", ["euclidean", "sqeuclidean"])
+def test_pruned_batch_equals_reference(kind: CostKind) -> None:
+    """Repetitions close to the reference (most cells pruned), unrelated ones (few pruned),
+    integer frames (ties), per-feature weights and bands; a band the corner-to-corner path
+    leaves (nothing pruned), and one with no admissible path at all."""
+    rng = np.random.default_rng(12)
+    y = rng.standard_normal((40, 18))
+    xs = [
+        y + 0.3 * rng.standard_normal(y.shape),
+        np.repeat(y, 2, axis=0)[::3] + 0.1 * rng.standard_normal((27, 18)),
+        rng.standard_normal((55, 18)),
+        rng.integers(0, 2, (33, 18)).astype(float),
+        y[:1],
+    ]
+    for opt in (
+        DTWOptions(cost=kind),
+        DTWOptions(cost=kind, weights=tuple(rng.uniform(0.2, 2.0, 6)), window=5),
+        DTWOptions(cost=kind, window=0),
+    ):
+        ref = []
+        for x in xs:
+            try:
+                ref.append(dtw_reference.align(x, y, opt).cost)
+            except ValueError:
+                ref.append(None)
+        if None in ref:
+            with pytest.raises(ValueError, match="no admissible"):
+                dtw.distance_batch(xs, y, opt)
+            usable = [x for x, r in zip(xs, ref, strict=True) if r is not None]
+            ref = [r for r in ref if r is not None]
+        else:
+            usable = xs
+        np.testing.assert_allclose(dtw.distance_batch(usable, y, opt), ref, rtol=1e-12)
+
+
+def test_path_rows_equal_general_rows() -> None:
+    """The closed-begin path DP (no range tests) gives the general row's values and
+    back-pointers, band edges and ties (integer frames) included."""
+    rng = np.random.default_rng(13)
+    for trial in range(30):
+        n, m = (int(v) for v in rng.integers(1, 25, 2))
+        x, y = rng.integers(0, 3, (n, 2)).astype(float), rng.integers(0, 3, (m, 2)) * 1.0
+        C = cost_matrix(x, y, "sqeuclidean")
+        window = None if trial % 3 == 0 else int(rng.integers(0, 6))
+        lo, hi = band_limits(n, m, DTWOptions(window=window, open_end=trial % 2 == 1))
+        fast, general = (
+            dtw.DPState(n, m, DTWOptions(), path=True),
+            dtw.DPState(n, m, DTWOptions(), path=True),
+        )
+        general.path_only = False
+        fast.rows(C, 0, n, lo, hi)
+        general.rows(C, 0, n, lo, hi)
+        assert fast.path_only
+        rows = [i for i in range(n) if lo[i] <= hi[i]]
+        for i in rows:
+            np.testing.assert_array_equal(
+                fast.dirs[i, lo[i] : hi[i] + 1], general.dirs[i, lo[i] : hi[i] + 1]
+            )
+        last = (n - 1) & 1
+        np.testing.assert_array_equal(
+            fast.D[last, lo[n - 1] : hi[n - 1] + 1], general.D[last, lo[n - 1] : hi[n - 1] + 1]
+        )
+
+
 def test_batch_uses_two_threads_on_big_batches(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(dtw, "_PARALLEL_MIN_CELLS", 0)
+    monkeypatch.setattr(row_blocks, "PARALLEL_MIN_CELLS", 0)
     rng = np.random.default_rng(5)
     y = rng.standard_normal((30, 4))
     xs = [rng.standard_normal((25, 4)) for _ in range(7)]

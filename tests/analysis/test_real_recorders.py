@@ -5,25 +5,31 @@ targets, each in its recorder's own format. Every file is read by content; an ex
 the Kinect take counts the same repetitions in the Vicon take, and in BlazePose's where the
 camera shows the movement's plane (docs/CAPTURE_SOURCES.md).
 
-Not yet met (issue 35, measured and reported): Vicon counts one repetition of ELK where the
-Kinect counts two, and the shoulder elevation's peak in CTK reads 14–17° lower from Vicon's
-joint centres than from the Kinect's; those are not asserted here."""
+The ELK and RTK Vicon files label the left arm's two targets the other way round (the "arm"
+target lies on the forearm); read as labelled, the left shoulder's centre sat 7–9 cm low, the
+trunk leaned 5° over the take and ELK counted one repetition; they are swapped back by place.
+
+Not yet met (issue 35, measured and reported in docs/EVALUATION.md): the shoulder elevation's
+peak in CTK reads 14–17° higher from the Kinect than from Vicon's joint centres (the Kinect
+loses its shoulder joints while the elbows cover them); that is not asserted here."""
 
 from __future__ import annotations
 
 from functools import cache
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from analysis.clinical import angle_series
 from analysis.landmarks import suggest_key_poses
 from analysis.pipeline.model import build_model
 from analysis.pipeline.run import analyse
-from analysis.sources import read_recording
+from analysis.sources import read_recording, vicon
 
 KERAAL = Path(__file__).parent / "fixtures" / "keraal"
+TILT = "trunk_lateral_flexion"
 EXERCISES = ("CTK", "ELK", "RTK")
-VICON_COUNTED = ("CTK", "RTK")
 
 
 def imported(recorder: str, exercise: str):
@@ -61,7 +67,7 @@ def test_each_recorders_own_file_is_read_by_content(exercise):
     assert abs(blazepose.motion.n_frames - kinect.motion.n_frames) <= 4
 
 
-@pytest.mark.parametrize("exercise", VICON_COUNTED)
+@pytest.mark.parametrize("exercise", EXERCISES)
 def test_vicon_counts_the_repetitions_the_kinect_counts(exercise):
     assert count("Kinect", exercise) >= 1
     assert count("Vicon", exercise) == count("Kinect", exercise)
@@ -89,3 +95,50 @@ def test_mirrored_blazepose_is_put_back_on_the_right_side():
         peaks = {side: angles[f"shoulder_elevation_{side}"].max for side in ("left", "right")}
         first[recorder] = max(peaks, key=peaks.get)
     assert first["Kinect"] == first["BP"]
+
+
+def _swapped_columns(content: bytes, first: str, second: str) -> bytes:
+    """The Vicon text with two targets' columns exchanged (what a mislabelled file holds)."""
+    a, b = (vicon.TARGETS.index(name) * vicon.VALUES_PER_TARGET for name in (first, second))
+    width = vicon.VALUES_PER_TARGET
+    lines = []
+    for line in content.decode().splitlines():
+        cells = line.split()
+        if cells:
+            cells[a : a + width], cells[b : b + width] = cells[b : b + width], cells[a : a + width]
+        lines.append(" ".join(cells))
+    return "\n".join(lines).encode()
+
+
+@pytest.mark.parametrize(("first", "second"), [("Left Arm", "Left Forearm"),
+                                               ("Right Thigh", "Right Tibia")])  # fmt: skip
+def test_vicon_targets_labelled_the_other_way_round_are_swapped_back(first, second):
+    path = next(KERAAL.glob("G3-Vicon-CTK-*"))
+    original = read_recording(path.name, path.read_bytes())
+    mislabelled = read_recording(path.name, _swapped_columns(path.read_bytes(), first, second))
+    assert not any("other way round" in w for w in original.report.warnings)
+    told = [w for w in mislabelled.report.warnings if "other way round" in w]
+    assert len(told) == 1 and first.lower() in told[0] and second.lower() in told[0]
+    np.testing.assert_allclose(mislabelled.motion.frames, original.motion.frames, atol=1e-9)
+
+
+@pytest.mark.parametrize("exercise", ("ELK", "RTK"))
+def test_the_keraal_vicon_takes_that_label_the_left_arm_the_other_way_round_are_read_right(
+    exercise,
+):
+    """Read as labelled, Vicon's trunk leaned 5–6° over the take (the median; the left shoulder's
+    centre fitted between the shoulder and the forearm); swapped back, as upright as the Kinect."""
+    vicon_take = imported("Vicon", exercise)
+    assert any("left arm and left forearm" in w for w in vicon_take.report.warnings)
+    lean = {
+        recorder: float(np.median(angle_series(imported(recorder, exercise).motion)[TILT]))
+        for recorder in ("Kinect", "Vicon")
+    }
+    assert abs(lean["Vicon"] - lean["Kinect"]) <= 2.0
+
+
+def test_the_sideways_bend_ELK_trains_reads_within_10_degrees_from_kinect_and_vicon():
+    kinect = summary("Kinect", "ELK").clinical_angles[TILT]
+    seen = summary("Vicon", "ELK").clinical_angles[TILT]
+    assert kinect.max - kinect.min > 40.0 and seen.max - seen.min > 40.0
+    assert abs(seen.min - kinect.min) <= 10.0 and abs(seen.max - kinect.max) <= 10.0

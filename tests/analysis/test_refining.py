@@ -220,3 +220,87 @@ def test_tempo_prior_drops_a_repetition_far_quicker_than_training():
     assert plain.frames.tolist() == frames  # tempo 0: a valid sequence stays as it is
     out = regularise(cands(frames, types), sig, FAR, GRAMMAR, GrammarOptions(tempo=4.0), gaps=gaps)
     assert out.types.tolist() == [1, 2, 1, 2, 1] and 43 not in out.frames.tolist()
+
+
+def _reference_bridges(distances, span, allowed, insert):
+    """The bridges of one pair of kept landmarks, as numpy arrays (the programme's reference)."""
+    from analysis.landmarks.regularise import pose_costs
+
+    width = allowed.shape[0]
+    via = np.full((width, width), np.inf)
+    kind = np.full((width, width), -1, dtype=np.int64)
+    where = np.full((width, width), -1, dtype=np.int64)
+    inside = distances[span[0] + 1 : span[1]]
+    if inside.shape[0]:
+        at = np.argmin(inside, axis=0)
+        price = insert + pose_costs(inside)[at, np.arange(width)]
+        for sigma in range(width):
+            c = np.where(allowed[:, sigma][:, None] & allowed[sigma][None, :], price[sigma], np.inf)
+            better = c < via
+            via[better], kind[better], where[better] = c[better], sigma, span[0] + 1 + at[sigma]
+    return via, kind, where
+
+
+def _reference_regularise(landmarks, signature, means, allowed, options, *, gaps):
+    """`regularise`'s programme written with numpy arrays, one (width, width) step at a time
+    (the compiled one must give the same costs and back-pointers, bit for bit)."""
+    from analysis.landmarks.regularise import pose_costs, pose_distances
+
+    n, width = landmarks.frames.size, allowed.shape[0]
+    distances = pose_distances(signature, means, width)
+    retyped = np.arange(width)[None, :] != landmarks.types[:, None]
+    cost = pose_costs(distances[landmarks.frames]) + options.retype * retyped
+    best = cost + options.delete * np.arange(n)[:, None]
+    back = np.full((n, width, 4), -1, dtype=np.int64)
+    for k in range(1, n):
+        for j in range(max(0, k - options.lookback - 1), k):
+            span = (int(landmarks.frames[j]), int(landmarks.frames[k]))
+            via, kind, where = _reference_bridges(distances, span, allowed, options.insert)
+            direct = np.where(allowed, 0.0, np.inf)
+            if options.tempo > 0:
+                direct = direct + tempo_costs(float(span[1] - span[0]), gaps, options)
+                half = tempo_costs((span[1] - span[0]) / 2.0, gaps, options)
+                sigma = np.maximum(kind, 0)
+                before, after = np.indices(kind.shape)
+                via = via + np.where(kind >= 0, half[before, sigma] + half[sigma, after], 0.0)
+            total = best[j][:, None] + np.minimum(direct, via) + options.delete * (k - j - 1)
+            src, cols = np.argmin(total, axis=0), np.arange(width)
+            value = total[src, cols] + cost[k]
+            better = value < best[k]
+            bridged = via[src, cols] < direct[src, cols]
+            record = np.column_stack([
+                np.full(width, j), src, np.where(bridged, kind[src, cols], -1),
+                np.where(bridged, where[src, cols], -1),
+            ])  # fmt: skip
+            best[k, better], back[k, better] = value[better], record[better]
+    return best, back
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("tempo", [0.0, 3.0])
+def test_compiled_grammar_typing_matches_the_array_formulas_bit_for_bit(seed, tempo, monkeypatch):
+    import analysis.landmarks.regularise as module
+
+    rng = np.random.default_rng(seed)
+    n_types = int(rng.integers(2, 5))
+    frames = np.sort(rng.choice(np.arange(200), size=int(rng.integers(2, 30)), replace=False))
+    types = rng.integers(1, n_types + 1, frames.size)
+    sig = rng.normal(size=(200, 3))
+    means = {t: rng.normal(size=3) for t in range(1, n_types + 1) if t != 2 or seed % 2}
+    allowed = rng.random((n_types + 1, n_types + 1)) < 0.6
+    gaps = typical_gaps([(frames, types)], n_types)
+    options = GrammarOptions(tempo=tempo, lookback=int(rng.integers(1, 5)))
+    landmarks = cands(frames, types)
+    seen = {}
+
+    def kept(marks, total, back):
+        seen["total"], seen["back"] = total, back
+        return marks
+
+    monkeypatch.setattr(module, "_regularised", kept)
+    module.regularise(landmarks, sig, means, allowed, options, gaps=gaps)
+    best, back = _reference_regularise(landmarks, sig, means, allowed, options, gaps=gaps)
+    n = frames.size
+    expected = best + options.delete * (n - 1 - np.arange(n))[:, None]
+    assert seen["total"].tobytes() == expected.tobytes()
+    assert np.array_equal(seen["back"], back)

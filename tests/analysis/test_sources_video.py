@@ -15,7 +15,8 @@ import pytest
 from analysis.bvh import read
 from analysis.pipeline import analyse, build_model
 from analysis.sources import CaptureFileError, read_recording
-from analysis.sources.video import probe, read_video
+from analysis.sources.pose_tracking import slices
+from analysis.sources.video import landmarks_from_video, probe, read_video
 from tests.analysis.fixtures.capture.make_squat_reference import (
     KEY_POSE_FRAMES,
     KEY_POSE_TYPES,
@@ -85,3 +86,39 @@ def test_a_video_without_a_person_is_refused_in_words(tmp_path):
     writer.release()
     with pytest.raises(CaptureFileError, match=r"found in only 0 of 45 frames"):
         read_video(path)
+
+
+def clip(path: Path, frames: range, fps: float) -> Path:
+    """The squat video's ``frames`` at half size, written at ``fps`` without loss (FFV1): a
+    frame reads back as the very picture written."""
+    source = cv2.VideoCapture(str(VIDEO))
+    source.set(cv2.CAP_PROP_POS_FRAMES, frames.start)
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps, (304, 540))
+    for index in range(frames.stop - frames.start):
+        ok, frame = source.read()
+        assert ok
+        if index % frames.step == 0:
+            writer.write(cv2.resize(frame, (304, 540), interpolation=cv2.INTER_AREA))
+    writer.release()
+    source.release()
+    return path
+
+
+def test_a_60_fps_video_is_read_at_30_frames_a_second(tmp_path):
+    """Every other frame goes to MediaPipe: the landmarks of a 30 fps video of those frames."""
+    path = clip(tmp_path / "60.mkv", range(240, 360), 59.94)
+    sixty = landmarks_from_video(path, model="lite")
+    assert sixty.step == 2 and sixty.world.shape[0] == 60 and sixty.found.all()
+    assert sixty.fps == pytest.approx(29.97)
+    thirty = clip(tmp_path / "30.mkv", range(240, 360, 2), 29.97)
+    np.testing.assert_array_equal(sixty.world, landmarks_from_video(thirty, model="lite").world)
+    recording = read_video(path, model="lite")  # the same 2 s, at the frames' rate
+    assert recording.motion.n_frames == 60 and recording.motion.fps == pytest.approx(29.97)
+    assert recording.report.layout.endswith("60 frames per second, analysed at 30")
+
+
+def test_slices_of_a_video_read_every_other_frame_start_on_a_frame_that_is_read():
+    for frames, workers in ((1800, 2), (1801, 3), (999, 4)):
+        starts = [start for start, _ in slices(frames, workers, step=2)]
+        assert starts[0] == 0 and all(start % 2 == 0 for start in starts)
+        assert starts == sorted(set(starts)) and len(starts) == workers

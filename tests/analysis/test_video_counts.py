@@ -6,8 +6,9 @@ repetitions, nor is the lifter racking the bar at the end of the take.
 The videos and their landmarks are in `fixtures/capture/` (provenance and licences in its README;
 `make_video_landmarks.py` says how the landmarks were made); the UI-PRMD exercises are made as the
 demo clinic makes them, and camera sessions as the browser's pose engine would take the frames
-(`bench/eval_videos.py`, which prints the same counts). The counting tests start from the
-landmarks; one test reads the squat video itself (about 20 s) and checks that it still gives them.
+(`tests/video_cases.py`; `bench/eval_videos.py` prints the same counts). The counting tests
+start from the landmarks; one test reads the squat video itself (about 20 s) and checks that it
+still gives them.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from analysis.landmarks.segmentation import fuse_peaks
 from analysis.pipeline import FittedModel, analyse, build_model
 from analysis.pipeline.match import Candidate, MatchContext, features_of
 from analysis.sources import read_recording
-from bench.eval_videos import (
+from tests.video_cases import (
     CAPTURE,
     CLIP_SLOWER,
     camera_recording,

@@ -5,7 +5,9 @@ in the environment for the video uploads) from the repository's own test video.
 - `squat_clip`: the phone video of two squats (tests/analysis/fixtures/capture, licence beside
   it), every third frame, smaller, and played ``slower`` times slower than filmed: the pose
   engine on a software renderer finds a few frames a second, and a slower clip gives it more
-  of each squat.
+  of each squat. ``between`` keeps only that part of the video (seconds as filmed): the
+  squats bottom near 10.2 s and 16.8 s, the lifter stands still from the start to 9 s and racks
+  the bar from 19 s.
 - `empty_room_clip`: a still picture of an empty room (a wall, a floor, a door): no person.
 """
 
@@ -30,19 +32,26 @@ def _frame(picture: np.ndarray) -> bytes:
 
 
 def squat_clip(
-    path: Path, *, slower: float = 1.5, step: int = 3, width: int = 240
+    path: Path,
+    *,
+    slower: float = 1.5,
+    step: int = 3,
+    width: int = 240,
+    between: tuple[float, float] = (0.0, float("inf")),
 ) -> tuple[Path, float]:
     """The squat video as a `.y4m` clip; returns the path and the clip's length in seconds."""
     capture = cv2.VideoCapture(str(VIDEO))
-    fps = Fraction(capture.get(cv2.CAP_PROP_FPS) / step / slower).limit_denominator(100)
+    filmed_fps = capture.get(cv2.CAP_PROP_FPS)
+    fps = Fraction(filmed_fps / step / slower).limit_denominator(100)
+    first, last = round(between[0] * filmed_fps), between[1] * filmed_fps  # frame indices
     frames = 0
     with path.open("wb") as out:
         index = 0
-        while True:
+        while index <= last:
             ok, picture = capture.read()
             if not ok:
                 break
-            if index % step == 0:
+            if index >= first and (index - first) % step == 0:
                 h, w = picture.shape[:2]
                 size = (width, int(h * width / w) // 2 * 2)
                 small = cv2.resize(picture, size, interpolation=cv2.INTER_AREA)

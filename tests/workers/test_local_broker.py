@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+from tests.local_server import free_port
 from workers.local import local_env, server_command, supervise, worker_command
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -65,6 +66,33 @@ def test_worker_consumes_every_queue_with_beat_and_the_server_is_runserver(tmp_p
     assert "-Q" not in command, "no -Q: every queue (analyses, models, reports)"
     assert f"--schedule={tmp_path / 'celerybeat-schedule'}" in command
     assert server_command("127.0.0.1:9")[-2:] == ["runserver", "127.0.0.1:9"]
+    # `make run` (--demo): migrations and the demo clinic in the server's own process.
+    demo = server_command("127.0.0.1:9", reload=False, demo=True)
+    assert demo[-3:] == ["serve_demo", "--noreload", "127.0.0.1:9"]
+
+
+def test_after_a_server_that_prepares_the_database_the_worker_starts_once_it_answers(tmp_path):
+    """With ``worker_after`` (`make run`: the server migrates first) the worker starts only once
+    the server answers on its port; a server that ends before answering leaves no worker."""
+    port = free_port()
+    address = f"127.0.0.1:{port}"
+    seen = tmp_path / "seen"
+    worker = (
+        "import pathlib, time\nfrom workers.local import answers\n"
+        f"pathlib.Path({str(seen)!r}).write_text(str(answers({address!r})))\n"
+        "time.sleep(120)\n"
+    )
+    server = (
+        "import socket, time\ntime.sleep(3)\n"
+        f"listening = socket.create_server(('127.0.0.1', {port}))\ntime.sleep(5)\n"
+    )
+    workers = [sys.executable, "-c", worker]
+    code = supervise(workers, [sys.executable, "-c", server], os.environ, worker_after=address)
+    assert code == 0 and seen.read_text() == "True", "the worker started after the server answered"
+    seen.unlink()
+    failing = [sys.executable, "-c", "import sys, time; time.sleep(1); sys.exit(3)"]
+    assert supervise(workers, failing, os.environ, worker_after=address) == 3
+    assert not seen.exists(), "no worker for a server that never answered"
 
 
 def test_a_worker_that_dies_is_started_again_and_the_server_ending_stops_all(tmp_path):
