@@ -81,7 +81,10 @@ worker: deps
 beat: deps
 	$(BIN)/celery -A workers beat --loglevel=INFO
 
+# The compiled kernels go into their cache first (tests/warm_kernels.py): otherwise every
+# process the suite starts compiles its own copy of them at once.
 test: deps
+	$(BIN)/python -m tests.warm_kernels
 	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder $(PYTEST_ARGS)
 
 # The suite keeps short fixed-seed versions of the long loops; their full runs are here: every
@@ -89,6 +92,7 @@ test: deps
 test-long: capture-check hostile fuzz
 
 test-analysis: $(VENV)/.stamp-python
+	$(BIN)/python -m tests.warm_kernels
 	$(BIN)/python -m pytest tests/analysis -p no:django $(PYTEST_ARGS)
 
 lint: $(VENV)/.stamp-python

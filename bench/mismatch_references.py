@@ -15,9 +15,15 @@ ten exercises; per margin it prints the sessions whose own exercise is not the n
 largest own-exercise ratio (own distance over the nearest other exercise's), the sessions of the
 right exercise the margin refuses, the pairs of a session and another exercise the distance test
 accepts, and the refusals whose nearest exercise (the one a move would follow) is not the
-session's own.
+session's own, and the smallest ratio of another exercise (its distance over the nearest of the
+rest: at or below the margin the distance test accepts it).
 
-    python -m bench.mismatch_references [--jobs 2] [--sets s01 s01,s02 s01,s03 s01,s04]
+The set ``others`` is the fit check as `bench.eval_mismatch` runs it: s01's reference and the
+correct sessions of every other subject but the compared session's own (a clinic with confirmed
+takes of other people, none of this patient's); from six takes per exercise on the check compares
+with margin 1 (`analysis.pipeline.match.MatchOptions.confirmed_margin`).
+
+    python -m bench.mismatch_references [--jobs 2] [--sets s01 s01,s02 s01,s03 s01,s04 others]
 """
 
 from __future__ import annotations
@@ -35,7 +41,7 @@ from analysis.pipeline.match import distances, features_of
 from bench.eval_mismatch import DATA, EXERCISES, SUBJECTS
 
 FloatArray = npt.NDArray[np.float64]
-MARGINS = (1.1, 1.2, 1.3)
+MARGINS = (1.0, 1.1, 1.2, 1.3)
 
 
 def session_names() -> list[str]:
@@ -52,21 +58,34 @@ def row(args: tuple[FloatArray, list[FloatArray]]) -> FloatArray:
     return distances(mine, library)
 
 
+def references_for(session: str, subjects: list[str]) -> list[str]:
+    """The reference subjects a session is compared with: ``others`` is s01 and every subject
+    but the session's own."""
+    if subjects != ["others"]:
+        return subjects
+    return [s for s in SUBJECTS if s == "s01" or s != session[4:7]]
+
+
 def table(sessions: list[str], refs: list[str], dist: FloatArray, subjects: list[str]) -> str:
     """The figures for one set of reference subjects (module docstring)."""
     column = {r: k for k, r in enumerate(refs)}
-    taken = {f"{e}_{s}_correct" for e in EXERCISES for s in subjects}
-    tested = [k for k, n in enumerate(sessions) if n not in taken]
+    by = {n: references_for(n, subjects) for n in sessions}
+    # a session that is one of its own references is not tested
+    tested = [k for k, n in enumerate(sessions)
+              if n[4:7] not in by[n] or not n.endswith("_correct")]  # fmt: skip
     near = np.array([
-        [min(dist[k, column[f"{e}_{s}_correct"]] for s in subjects) for e in EXERCISES]
+        [min(dist[k, column[f"{e}_{s}_correct"]] for s in by[sessions[k]]) for e in EXERCISES]
         for k in tested
     ])  # fmt: skip
     own = np.array([EXERCISES.index(sessions[k][:3]) for k in tested])
     others = np.array([np.delete(d, o).min() for d, o in zip(near, own, strict=True)])
     ratio = near[np.arange(len(own)), own] / others
+    closest = min(d[k] / np.delete(d, k).min() for d, o in zip(near, own, strict=True)
+                  for k in range(len(EXERCISES)) if k != o)  # fmt: skip
     lines = [
         f"references {'+'.join(subjects)}: {len(tested)} sessions, own exercise not the nearest "
-        f"in {int((ratio > 1).sum())}, largest own ratio {ratio.max():.3f}"
+        f"in {int((ratio > 1).sum())}, largest own ratio {ratio.max():.3f}, smallest ratio of "
+        f"another exercise {closest:.3f}"
     ]
     for margin in MARGINS:
         accepted = wrong_first = 0
@@ -94,7 +113,8 @@ def main() -> None:
     start = time.perf_counter()
     sets = [s.split(",") for s in args.sets]
     sessions = session_names()
-    refs = sorted({f"{e}_{s}_correct" for e in EXERCISES for group in sets for s in group})
+    every = [SUBJECTS if group == ["others"] else group for group in sets]
+    refs = sorted({f"{e}_{s}_correct" for e in EXERCISES for group in every for s in group})
     with multiprocessing.get_context("fork").Pool(args.jobs) as pool:
         found = dict(zip(sessions, pool.map(features, sessions, chunksize=4), strict=True))
         library = [found[r] for r in refs]

@@ -13,7 +13,7 @@ from django.conf import settings
 from analysis.bvh import AnalysisInputError
 from analysis.pipeline.match import Candidate, MatchContext
 from webapp.exercises.models import Exercise
-from webapp.recordings.similar import exercise_features
+from webapp.recordings.similar import confirmed_takes, exercise_features
 
 log = logging.getLogger(__name__)
 
@@ -24,7 +24,8 @@ def spoken(exercise: Exercise) -> str:
 
 
 def match_context(exercise: Exercise, recorder: str | None = None) -> MatchContext:
-    """The exercise's name and the clinic's other exercises that have a readable tutor;
+    """The exercise's name and the clinic's other exercises that have a readable tutor, each with
+    its takes a therapist confirmed as correct (`webapp.recordings.similar.confirmed_takes`);
     ``recorder``: the recording's source kind (`analysis.sources.RecordingSource.kind`), to
     say whether it was captured as the exercise's reference was."""
     others = (
@@ -40,6 +41,11 @@ def match_context(exercise: Exercise, recorder: str | None = None) -> MatchConte
         except (AnalysisInputError, ValueError, OSError):  # that tutor cannot be compared
             log.info("exercise %s left out of the fit check", other.pk, exc_info=True)
             continue
-        candidates.append(Candidate(str(other.pk), spoken(other), features))
+        candidates.append(Candidate(str(other.pk), spoken(other), features, takes_of(other)))
     same = recorder is None or recorder == exercise.tutor_kind()
-    return MatchContext(spoken(exercise), tuple(candidates), same_recorder=same)
+    return MatchContext(spoken(exercise), tuple(candidates), same, takes_of(exercise))
+
+
+def takes_of(exercise: Exercise) -> tuple[np.ndarray, ...]:
+    """The exercise's confirmed takes, as the check's float64 features."""
+    return tuple(np.asarray(t, dtype=np.float64) for t in confirmed_takes(exercise))

@@ -35,7 +35,6 @@ import os
 import re
 import zlib
 from dataclasses import dataclass
-from functools import cached_property
 from pathlib import Path
 from typing import IO
 
@@ -68,9 +67,11 @@ class Skeleton:
     end_site_parents: npt.NDArray[np.int64]
     end_site_offsets: FloatArray
 
-    @cached_property
+    @property
     def channel_starts(self) -> npt.NDArray[np.int64]:
-        """Index of each joint's first channel in a frame row: (J,)."""
+        """Index of each joint's first channel in a frame row: (J,). Worked out on every read
+        (a cumulative sum over J joints, microseconds): saved models pickle their skeleton, and
+        a value kept on the object would have to be rebuilt when one written before is read."""
         counts = np.array([len(c) for c in self.channels], dtype=np.int64)
         return np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.int64)
 

@@ -10,7 +10,6 @@ that write 6 channels on every joint expect); other axes keep the OFFSET. Quater
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
 import numba
@@ -238,33 +237,36 @@ class Kinematics:
     """One recording's forward kinematics, computed once (`kinematics`) and handed to every
     stage that needs it: ``local_q`` (F, J, 4) local rotations, ``local_t`` (F, J, 3)
     translations from the parent, ``global_q`` (F, J, 4) world rotations, ``positions``
-    (F, J, 3) world positions (file units)."""
+    (F, J, 3) world positions (file units), ``facing`` (F, J, 3) root-relative positions facing
+    the recording's mean heading (`heading_facing`, read-only): the scaled positions, the
+    key-pose signature and the pose series all start from them."""
 
     local_q: FloatArray
     local_t: FloatArray
     global_q: FloatArray
     positions: FloatArray
+    facing: FloatArray
 
     @property
     def heading(self) -> FloatArray:
         """The root's heading per frame, radians: (F,) (as `heading_angles`)."""
-        return quat.twist_angle(self.local_q[:, 0], "XYZ"[UP_AXIS])
+        return _root_heading(self.local_q)
 
-    @functools.cached_property
-    def facing(self) -> FloatArray:
-        """Root-relative positions facing the recording's mean heading (`heading_facing`),
-        (F, J, 3) file units, read-only: computed on first use and then shared, as the scaled
-        positions, the key-pose signature and the pose series all start from them."""
-        out = heading_facing(self.positions, self.heading)
-        out.setflags(write=False)
-        return out
+
+def _root_heading(local_q: FloatArray) -> FloatArray:
+    return quat.twist_angle(local_q[:, 0], "XYZ"[UP_AXIS])
 
 
 def kinematics(motion: Motion) -> Kinematics:
-    """Every frame's rotations and positions in one forward-kinematics pass."""
+    """Every frame's rotations and positions in one forward-kinematics pass, and the positions
+    facing the mean heading: made here with the rest rather than on first read, so the object
+    holds nothing that appears later (the few callers that never read them, such as the live
+    session's once-a-repetition catch-up, pay a small rotation of points they already have)."""
     local_q, local_t = _rotations(motion), translations(motion)
     global_q, pos = forward(motion.skeleton, local_q, local_t)
-    return Kinematics(local_q, local_t, global_q, pos)
+    facing = heading_facing(pos, _root_heading(local_q))
+    facing.setflags(write=False)
+    return Kinematics(local_q, local_t, global_q, pos, facing)
 
 
 def global_rotations(motion: Motion) -> FloatArray:

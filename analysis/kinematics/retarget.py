@@ -319,12 +319,13 @@ class _Retarget:
         target = self.target
         n_frames = world_rot.shape[0]
         frames = np.zeros((n_frames, target.n_channels))
+        starts = target.channel_starts  # worked out on each read: once here, not per joint
         for j, channels in enumerate(target.channels):
             parent = self.parents[j]
             local = world_rot[:, j]
             if parent >= 0:
                 local = world_rot[:, parent].transpose(0, 2, 1) @ local
-            start = int(target.channel_starts[j])
+            start = int(starts[j])
             axes = "".join(c[0] for c in channels if c.endswith("rotation"))
             if axes:
                 angles = quat.matrix_to_euler(local, quat.complete_order(axes))

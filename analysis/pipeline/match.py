@@ -26,6 +26,16 @@ that are nearer than the chosen one, nearest first: the nearest, and the next on
 as close (squat and sit to stand). So a recording moved to the named exercise passes the distance
 test there, and one moved to an exercise the test rejects is told "does not look like" again
 (the worker passes the same clinic's exercises whichever of them the recording belongs to).
+
+Confirmed takes: an exercise is represented by its reference and by the takes a therapist confirmed
+as correct (``MatchContext.own_takes``, ``Candidate.takes``); the distance to an exercise is the
+distance to the nearest of them. One person's reference leaves room for another person's style,
+hence the margin; when every exercise compared holds ``MatchOptions.confirmed_takes`` takes, the
+styles are covered and the nearest exercise is the one that fits (``confirmed_margin``, 1). On
+UI-PRMD with six or seven people's takes per exercise, each session compared without its own
+person's takes, a session's own exercise was always the nearest (at most 0.972 of the nearest
+other's distance) and every other exercise at least 1.029 times farther than the nearest
+(`bench/mismatch_references.py`, set ``others``).
 """
 
 from __future__ import annotations
@@ -50,11 +60,16 @@ FloatArray = npt.NDArray[np.float64]
 @dataclass(frozen=True)
 class Candidate:
     """Another exercise of the clinic: its id, its name and its tutor's retrieval features
-    ((F, 17) body-part distances at 15 fps, `analysis.retrieval.recording_features`)."""
+    ((F, 17) body-part distances at 15 fps, `analysis.retrieval.recording_features`);
+    ``takes``: the same features of its takes confirmed as correct (module docstring)."""
 
     id: str
     name: str
     features: FloatArray
+    takes: Sequence[FloatArray] = ()
+
+    def references(self) -> list[FloatArray]:
+        return [np.asarray(f, dtype=np.float64) for f in (self.features, *self.takes)]
 
 
 @dataclass(frozen=True)
@@ -66,6 +81,12 @@ class MatchContext:
     # whether the recording was captured as the references were (a phone video against Kinect
     # references is not): distances across recorders carry the skeletons' differences too
     same_recorder: bool = True
+    # the exercise's own takes confirmed as correct, besides its reference (retrieval features)
+    own_takes: Sequence[FloatArray] = ()
+
+    def fewest_takes(self) -> int:
+        """The fewest takes (reference included) of any exercise compared."""
+        return 1 + min([len(self.own_takes), *(len(c.takes) for c in self.candidates)])
 
 
 @dataclass(frozen=True)
@@ -80,16 +101,24 @@ class MatchOptions:
     A recording from another kind of recorder than the references (a phone video or the camera
     page against Kinect references) is held to ``cross_recorder_margin``: the side-view squat
     video of tests/analysis/fixtures/capture/ comes 1.33 times (as uploaded) to 1.51 times (as
-    the camera page takes it) nearer the Kinect sit-to-stand than the Kinect deep squat."""
+    the camera page takes it) nearer the Kinect sit-to-stand than the Kinect deep squat.
+    When every exercise compared holds at least ``confirmed_takes`` takes (its reference and
+    confirmed correct takes), the nearest exercise fits and no other: ``confirmed_margin``."""
 
     min_progress: float = 0.25
     min_profile: float = 0.6
     min_own_motion: float = 0.3
     margin: float = 1.3
     cross_recorder_margin: float = 1.75
+    confirmed_takes: int = 6
+    confirmed_margin: float = 1.0
 
     def margin_for(self, context: MatchContext) -> float:
-        return self.margin if context.same_recorder else self.cross_recorder_margin
+        if not context.same_recorder:
+            return self.cross_recorder_margin
+        if context.candidates and context.fewest_takes() >= self.confirmed_takes:
+            return self.confirmed_margin
+        return self.margin
 
 
 def span(signal: FloatArray) -> float:
@@ -159,11 +188,22 @@ def distances(mine: FloatArray, library: Sequence[FloatArray]) -> FloatArray:
     return np.minimum(retriever.distances(mine), retriever.distances(mirrored_features(mine)))
 
 
+def comparable(takes: Sequence[FloatArray], columns: int) -> list[FloatArray]:
+    """The takes whose features have ``columns`` body-part distances (same feature set)."""
+    arrays = [np.asarray(t, dtype=np.float64) for t in takes]
+    return [t for t in arrays if t.ndim == 2 and t.shape[1] == columns and len(t)]
+
+
 def rank(
-    motion: Motion, model: FittedModel, candidates: Sequence[Candidate], kin: Kinematics
+    motion: Motion,
+    model: FittedModel,
+    candidates: Sequence[Candidate],
+    kin: Kinematics,
+    own_takes: Sequence[FloatArray] = (),
 ) -> Ranking | None:
     """The recording's `Ranking` (None without candidates or when a take's body parts cannot
-    be found); ``kin``: the motion's kinematics."""
+    be found); ``kin``: the motion's kinematics; ``own_takes``: the exercise's confirmed takes.
+    An exercise's distance is the distance to the nearest of its reference and its takes."""
     tutor = model.tutor_parts.features
     if not candidates or tutor.size == 0:
         return None
@@ -171,13 +211,17 @@ def rank(
         mine = features_of(motion, kin)
     except (AnalysisInputError, ValueError):
         return None
-    known = [c for c in candidates if c.features.ndim == 2 and c.features.shape[1] == mine.shape[1]]
+    width = mine.shape[1]
+    known = [c for c in candidates if comparable([c.features], width)]
     if not known:
         return None
-    library = [tutor, *(np.asarray(c.features, dtype=np.float64) for c in known)]
-    found = distances(mine, library)
-    others = sorted(zip(found[1:].tolist(), known, strict=True), key=lambda pair: pair[0])
-    return Ranking(float(found[0]), tuple(others))
+    groups = [comparable([tutor, *own_takes], width)]
+    groups += [comparable(c.references(), width) for c in known]
+    found = distances(mine, [take for group in groups for take in group])
+    ends = np.cumsum([len(group) for group in groups])
+    nearest = [float(found[end - len(g) : end].min()) for end, g in zip(ends, groups, strict=True)]
+    others = sorted(zip(nearest[1:], known, strict=True), key=lambda pair: pair[0])
+    return Ranking(nearest[0], tuple(others))
 
 
 def decide(evidence: Evidence, context: MatchContext, options: MatchOptions) -> ExerciseMatch:
@@ -221,7 +265,7 @@ def check_fit(  # noqa: PLR0917 (the pipeline's own figures, passed as they are)
     context, options = context or MatchContext(), options or MatchOptions()
     evidence = movement_evidence(points, progress, repetitions, model)
     motion, kin = seen
-    ranking = rank(motion, model, context.candidates, kin)
+    ranking = rank(motion, model, context.candidates, kin, context.own_takes)
     if ranking is not None:
         named = ranking.named(options.margin_for(context))
         evidence = replace(

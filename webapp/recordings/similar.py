@@ -10,6 +10,7 @@ question on the few candidates the question concerns, which takes milliseconds.
 from __future__ import annotations
 
 import hashlib
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -18,17 +19,21 @@ import numpy as np
 from django.conf import settings
 from django.core.cache import cache
 
-from analysis.bvh import Motion
+from analysis.bvh import AnalysisInputError, Motion
 from analysis.kinematics import positions
 from analysis.retrieval import MotionRetriever, recording_features
 from analysis.sources import read_recording
 from analysis.sources.video import SUFFIXES as VIDEO_SUFFIXES
 from webapp.accounts.models import User
 from webapp.exercises.models import Exercise
-from webapp.recordings.models import Recording
+from webapp.recordings.models import AnalysisRun, Recording, RunStatus
 
+log = logging.getLogger(__name__)
 FRAME_RATE = 15.0
 CACHE_SECONDS = 7 * 24 * 3600
+# The newest confirmed takes per exercise the fit check compares with (each costs one DTW; from
+# five on, with the reference, the check compares at `MatchOptions.confirmed_margin`).
+CONFIRMED_TAKES = 6
 
 
 @dataclass(frozen=True)
@@ -72,6 +77,43 @@ def exercise_features(exercise: Exercise) -> np.ndarray | None:
     checksum = exercise.tutor_checksum or hashlib.sha256(name).hexdigest()
     return _cached_features(f"retrieval-features:tutor-{exercise.pk}-{checksum}",
                             exercise.tutor_motion)  # fmt: skip
+
+
+def confirmed(run: AnalysisRun | None) -> bool:
+    """Whether a therapist confirmed this run's take as a correct one of its exercise: it is
+    the recording's newest run (a moved recording's new run is not yet), it fits its exercise,
+    and every repetition it found carries a therapist's "passed"."""
+    if run is None or run.status != RunStatus.SUCCEEDED:
+        return False
+    result = run.result
+    found = len(result.repetitions) if result is not None and result.match.fits else 0
+    verdicts = dict(run.repetition_labels.filter(index__lt=found).values_list("index", "passed"))
+    return found > 0 and len(verdicts) == found and all(verdicts.values())
+
+
+def confirmed_takes(exercise: Exercise, limit: int = CONFIRMED_TAKES) -> list[np.ndarray]:
+    """Retrieval features of the exercise's newest takes a therapist confirmed as correct
+    (`confirmed`); phone videos are left out (their features are the worker's long job), and so
+    is a take whose file can no longer be read."""
+    labelled = (
+        Recording.objects.filter(exercise=exercise, runs__repetition_labels__passed=True)
+        .distinct()
+        .order_by("-uploaded_at")
+    )
+    takes: list[np.ndarray] = []
+    for recording in labelled.iterator():
+        if len(takes) >= limit:
+            break
+        if not confirmed(recording.runs.order_by("-created_at").first()):
+            continue
+        try:
+            found = file_features(recording.file, recording.checksum)
+        except (AnalysisInputError, ValueError, OSError):
+            log.info("confirmed take %s left out of the fit check", recording.pk, exc_info=True)
+            continue
+        if found is not None:
+            takes.append(found)
+    return takes
 
 
 def fitted(features: list[np.ndarray], labels: list[Any]) -> MotionRetriever:

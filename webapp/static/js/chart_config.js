@@ -12,13 +12,17 @@
     responsive: true,
   };
   window.chartConfig = (extra) => Object.assign({}, base, extra || {});
+  // Every legend sits above its plot, right-aligned, in a top margin Plotly grows to fit it:
+  // there it covers neither a line nor an axis title. (Plotly's own place for a horizontal
+  // legend, under the plot, is where the x axis's title is drawn: on a phone, where the legend
+  // wraps onto many lines, the two overlap.)
+  window.legendAbove = () => ({ orientation: "h", x: 1, xanchor: "right", y: 1.02, yanchor: "bottom" });
   // The layout of a chart over session dates. `axis` (webapp.patients.progress.date_axis): a
   // range with a margin around the sessions and whole-day ticks labelled "12 Nov", so a single
-  // session never gives sub-second ticks. The legend sits above the plot, in its own margin,
-  // where it covers neither a line nor an axis title (Plotly 3 reads titles only as { text }).
+  // session never gives sub-second ticks (Plotly 3 reads titles only as { text }).
   window.progressLayout = (axis, xTitle, yTitle, extra = {}) => ({
     margin: { t: 40, r: 10, b: 50, l: 60 },
-    legend: { orientation: "h", x: 1, xanchor: "right", y: 1.02, yanchor: "bottom" },
+    legend: window.legendAbove(),
     ...extra,
     xaxis: { type: "date", title: { text: xTitle }, range: axis.range, tick0: axis.tick0, dtick: axis.dtick, tickformat: axis.tickformat, ...(extra.xaxis || {}) },
     yaxis: { title: { text: yTitle }, ...(extra.yaxis || {}) },

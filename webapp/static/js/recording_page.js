@@ -158,7 +158,7 @@ function charts(playback) {
   const clinical = angleTraces(meta, seconds);
   const traces = clinical.length ? clinical : segmentTraces(meta, seconds);
   const marks = meta.landmarks.map((m) => ({ type: "line", xref: "x", yref: "paper", x0: seconds(m.frame), x1: seconds(m.frame), y0: 0, y1: 1, line: { color: "#bbb", width: 1, dash: "dot" } }));
-  const layout = { margin: { t: 10, r: 10, b: 40, l: 45 }, xaxis: { title: { text: "time (s)" } }, yaxis: { title: { text: "angle (°)" } }, shapes: marks, legend: { orientation: "h" } };
+  const layout = { margin: { t: 10, r: 10, b: 40, l: 45 }, xaxis: { title: { text: "time (s)" } }, yaxis: { title: { text: "angle (°)" } }, shapes: marks, legend: window.legendAbove() };
   const chart = $("chart-angles");
   segmentChart(meta, seconds, layout);
   const reps = meta.repetitions;
@@ -176,9 +176,11 @@ function charts(playback) {
   return (frame) => {
     const full = chart._fullLayout;
     if (!full || !full.xaxis) return;
-    cursor.style.left = `${full.margin.l + full.xaxis.l2p(seconds(frame))}px`;
-    cursor.style.top = `${full.margin.t}px`;
-    cursor.style.height = `${full.height - full.margin.t - full.margin.b}px`;
+    // _size: the plot area as drawn, after Plotly grew the margins for the legend and ticks
+    // (`margin` holds only the margins asked for)
+    cursor.style.left = `${full._size.l + full.xaxis.l2p(seconds(frame))}px`;
+    cursor.style.top = `${full._size.t}px`;
+    cursor.style.height = `${full._size.h}px`;
   };
 }
 
