@@ -41,7 +41,12 @@ one) to the others, so that the clients' work is not counted against the server'
 
 ``--aligner`` also prints the in-process aligner's time per frame (``stream --model``);
 ``--stages`` prints only its processor time per frame sent by step (features, counter,
-open-end row, FP-C step, repetition end).
+open-end row, FP-C step, repetition end); ``--split`` only the consumer's in-process work per
+frame for the bench's session at ``--fps`` (session set-up, reading the binary messages, the
+aligner's per-frame steps, the repetition's end), the rest of the server's time per frame being
+the WebSocket and Channels path and the session's creation and connections.
+``--server-profile FILE`` runs Uvicorn under cProfile from the warm-up on
+(`bench.profiled_server`).
 """
 
 from __future__ import annotations
@@ -53,6 +58,7 @@ import json
 import os
 import platform
 import random
+import signal
 import subprocess
 import sys
 import tempfile
@@ -145,8 +151,16 @@ def setup_world(env: dict[str, str]) -> dict[str, str]:
 
 
 def start_server(
-    kind: str, env: dict[str, str], port: int, log: Path, cpus: set[int] | None = None
+    kind: str,
+    env: dict[str, str],
+    port: int,
+    log: Path,
+    cpus: set[int] | None = None,
+    *,
+    profile: Path | None = None,
 ) -> subprocess.Popen:
+    """A server process answering on ``port``; ``profile``: run Uvicorn under cProfile
+    (`bench.profiled_server`), writing its statistics there when it stops."""
     if kind == "runserver":
         argv = [sys.executable, "manage.py", "runserver", f"127.0.0.1:{port}", "--noreload"]
     elif kind == "uvicorn":
@@ -155,6 +169,8 @@ def start_server(
                 "--ws-per-message-deflate", "false", "--ws-max-size", str(1 << 20),
                 # after a run its Channels tasks keep it waiting past the 20 s stop_server allows
                 "--timeout-graceful-shutdown", "3"]  # fmt: skip
+        if profile is not None:
+            argv[1:3] = ["-m", "bench.profiled_server", str(profile)]
     elif kind == "gunicorn":  # pages and the API as docker-compose's `web` serves them (WSGI)
         argv = [sys.executable, "-m", "gunicorn", "webapp.wsgi:application", "--bind",
                 f"127.0.0.1:{port}", "--workers", "2"]  # fmt: skip
@@ -338,6 +354,7 @@ class Context:
     processes: int = 1
     proxy: bool = False  # through docker-compose's nginx proxy (deploy/), 2 processes
     server_cpus: set[int] | None = None  # the cores the server processes are pinned to
+    profile: Path | None = None  # profile Uvicorn after the warm-up: statistics to this stem
 
 
 def label(kind: str, ctx: Context) -> str:
@@ -358,16 +375,21 @@ def measure(kind: str, n: int, ctx: Context) -> Step:
     logs.mkdir(exist_ok=True)
     count = 1 if kind == "runserver" else ctx.processes
     ports = [free_port() for _ in range(count)]
+    stem = ctx.profile
     procs = [
-        start_server(kind, env, p, logs / f"{kind}-{n}-{i}.log", ctx.server_cpus)
+        start_server(kind, env, p, logs / f"{kind}-{n}-{i}.log", ctx.server_cpus,
+                     profile=None if stem is None else stem.with_name(f"{stem.name}-{n}-{i}.prof"))
         for i, p in enumerate(ports)
-    ]
+    ]  # fmt: skip
     step = Step(label(kind, ctx), n, sent=n * len(rec.frames), fps=fps)
     started, cpu = time.perf_counter(), [0.0]
     bases = [f"http://127.0.0.1:{port}" for port in ports]
 
     def warmed() -> None:  # processor time from here: imports and model loading are not in it
         cpu[0] = sum(cpu_seconds(p.pid) for p in procs)
+        if ctx.profile is not None:  # `bench.profiled_server` starts its profile
+            for proc in procs:
+                proc.send_signal(signal.SIGUSR1)
 
     client_cpu = time.process_time()
     try:
@@ -587,6 +609,55 @@ def stage_times(passes: int = 3) -> None:
         print(f"{name}: {micro:.1f} µs of processor time per frame sent")
 
 
+def split_times(fps: float, seconds: float, batch: int, sessions: int = 20) -> None:
+    """Processor time (``time.thread_time``) per frame sent of what the server's consumer does
+    in-process for a session of the bench (`recording_120` in binary messages of ``batch``
+    frames, each read by `decode_frames` and answered by `take_frames`): the session's set-up
+    (its ``start``), reading the messages, the aligner's per-frame steps and the repetition's
+    end; the median over ``sessions`` sessions after a warm-up one. What the server spends
+    beyond these (WebSocket, Channels, sending, the session's creation and connections) is its
+    processor time per frame less their sum."""
+    from analysis.live import LiveAligner, LiveSession
+    from analysis.live.frames import take_frames
+    from bench.eval_live import tutor_model
+
+    rec = recording_120(seconds, fps, batch, binary=True)
+    model = tutor_model(DATA, "m07")
+    spent: dict[str, float] = {}
+    LiveAligner._repetition = _timed(LiveAligner._repetition, "end", spent)  # type: ignore[method-assign]
+    runs: list[dict[str, float]] = []
+    for _ in range(sessions + 1):  # the first loads the compiled kernels
+        spent.clear()
+        session = LiveSession(model, max_fps=1e9, burst=1e9)  # no rate limit in a loop
+        started = time.thread_time()
+        session.handle({"type": "start", "header": rec.header})
+        spent["set-up"] = time.thread_time() - started
+        reading = aligning = 0.0
+        for _, message in rec.messages:
+            before = time.thread_time()
+            block = decode_frames(message)  # type: ignore[arg-type]
+            read = time.thread_time()
+            take_frames(session, block)
+            reading, aligning = reading + read - before, aligning + time.thread_time() - read
+        assert session.aligner is not None
+        runs.append({**spent, "reading": reading, "frames": aligning - spent.get("end", 0.0),
+                     "repetitions": len(session.aligner.repetitions)})  # fmt: skip
+    frames = len(rec.frames)
+    median = {k: float(np.median([r.get(k, 0.0) for r in runs[1:]])) for k in runs[-1]}
+    print(f"{fps:g} frames/s, {seconds:g} s ({frames} frames, {batch} a message, "
+          f"{median['repetitions']:g} repetitions), median of {sessions} sessions:")  # fmt: skip
+    total = 0.0
+    for name, label in (("set-up", "session set-up"), ("reading", "reading the messages"),
+                        ("frames", "per-frame steps"), ("end", "repetition's end")):  # fmt: skip
+        total += median.get(name, 0.0)
+        print(f"  {label}: {1e6 * median.get(name, 0.0) / frames:.1f} µs per frame sent")
+    print(
+        f"  together: {1e6 * total / frames:.1f} µs per frame sent; set-up "
+        f"{1e3 * median['set-up']:.2f} ms a session, the end "
+        f"{1e3 * median.get('end', 0.0) / max(median['repetitions'], 1):.2f} ms a repetition"
+    )
+
+
 def _timed(method: Callable, name: str, spent: dict[str, float]) -> Callable:
     def timed(*args: object) -> object:
         started = time.thread_time()
@@ -621,12 +692,20 @@ def main(argv: list[str] | None = None) -> None:
         help="the in-process aligner's processor time per frame sent, by step, then stop",
     )  # fmt: skip
     parser.add_argument(
+        "--split", action="store_true",
+        help="only print the consumer's in-process work per frame (--fps, --seconds, --batch)",
+    )  # fmt: skip
+    parser.add_argument(
         "--reading", action="store_true",
         help="only print the processor time to read a frame (JSON, binary) and to align it",
     )  # fmt: skip
     parser.add_argument(
         "--proxy", action="store_true",
         help="also through docker-compose's nginx proxy in front of 2 processes (redis, uvicorn)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--server-profile", type=Path,
+        help="run Uvicorn under cProfile after the warm-up; statistics to FILE-N-i.prof",
     )  # fmt: skip
     parser.add_argument(
         "--server-cpus", default="",
@@ -638,6 +717,9 @@ def main(argv: list[str] | None = None) -> None:
         aligner_times()
     if args.stages:
         stage_times()
+        return
+    if args.split:
+        split_times(args.fps, args.seconds, int(str(args.batch).split(",")[-1]))
         return
     if args.reading:
         reading_times(args.fps, int(str(args.batch).split(",")[-1]))
@@ -653,7 +735,8 @@ def main(argv: list[str] | None = None) -> None:
             for batch, processes, proxy in configurations(kind, args):
                 ctxs = [
                     Context(env, world, recording_120(args.seconds, args.fps, batch, binary),
-                            args.fps, folder, processes, proxy, server_cpus)
+                            args.fps, folder, processes, proxy, server_cpus,
+                            args.server_profile)
                     for binary in (form == "binary" for form in args.frames.split(","))
                 ]  # fmt: skip
                 steps += grow(kind, ctxs, [int(v) for v in args.counts.split(",")])

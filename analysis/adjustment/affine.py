@@ -50,8 +50,9 @@ from analysis.adjustment.sync import (
     tutor_frame_map,
 )
 from analysis.bvh import Motion, Skeleton
-from analysis.kinematics import forward, rotations, translations
 from analysis.kinematics import quaternions as quat
+from analysis.kinematics import rotations, translations
+from analysis.kinematics.forward_kinematics import forward_positions
 from analysis.landmarks import KeyPoses
 
 FloatArray = npt.NDArray[np.float64]
@@ -336,12 +337,12 @@ def demonstration_skeletons(
     tutor_g = gamma if tutor_gamma is None else tutor_gamma
     tutor_adj = adjust(tutor_q, lm, patient.local_q[lm], tutor_g, method, order=orders)
     if patient_world is None:
-        patient_world = forward(skeleton, patient.local_q, patient.local_t)[1]
+        patient_world = forward_positions(skeleton, patient.local_q, patient.local_t)
     return Demonstration(
         patient=patient_world,
-        patient_adjusted=forward(skeleton, patient_adj, patient.local_t)[1],
-        tutor=forward(skeleton, tutor_q, tutor_t)[1],
-        tutor_adjusted=forward(skeleton, tutor_adj, tutor_t)[1],
+        patient_adjusted=forward_positions(skeleton, patient_adj, patient.local_t),
+        tutor=forward_positions(skeleton, tutor_q, tutor_t),
+        tutor_adjusted=forward_positions(skeleton, tutor_adj, tutor_t),
         tutor_frame_map=fmap,
         pairs=tuple(pairs),
     )

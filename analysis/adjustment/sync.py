@@ -29,6 +29,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 
+import numba as nb
 import numpy as np
 import numpy.typing as npt
 
@@ -149,5 +150,18 @@ def sample_linear(values: FloatArray, frame_map: FloatArray) -> FloatArray:
     if v.shape[0] == 1:
         return np.repeat(v, len(frame_map), axis=0)
     lo, frac = _split(frame_map, v.shape[0])
-    w = frac.reshape(-1, *([1] * (v.ndim - 1)))
-    return (1.0 - w) * v[lo] + w * v[lo + 1]
+    rows = np.ascontiguousarray(v.reshape(v.shape[0], -1))
+    return _lerp_rows(rows, lo, frac).reshape(len(lo), *v.shape[1:])
+
+
+@nb.njit(cache=True, nogil=True)
+def _lerp_rows(v: FloatArray, lo: npt.NDArray[np.int64], w: FloatArray) -> FloatArray:
+    """out[i] = (1 - w[i]) v[lo[i]] + w[i] v[lo[i] + 1], each product and the sum rounded as
+    numpy's expression rounds them, without its four frame-sized temporaries."""
+    out = np.empty((lo.size, v.shape[1]))
+    for i in range(lo.size):
+        a, b, wi = v[lo[i]], v[lo[i] + 1], w[i]
+        keep = 1.0 - wi
+        for c in range(v.shape[1]):
+            out[i, c] = keep * a[c] + wi * b[c]
+    return out

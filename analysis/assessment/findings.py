@@ -55,6 +55,7 @@ compared side for side (``mirrored``). Thresholds are wide on purpose (goniomete
 
 from __future__ import annotations
 
+import statistics
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -248,12 +249,13 @@ def plainly_off(rep: RepetitionMeasures, ref: Reference, mirrored: bool = False)
 
 def _finding(kind: str, angle: str, tutor: float, hits: list[tuple[int, float, float]],
              total: int) -> Finding | None:  # fmt: skip
-    """A finding from its (repetition index, amount, patient value) hits, if frequent enough."""
+    """A finding from its (repetition index, amount, patient value) hits, if frequent enough.
+    Hits are never NaN (a NaN is beyond no tolerance): `statistics.median` is numpy's value."""
     if not hits or len(hits) < MIN_SHARE * total:
         return None
     return Finding(
-        kind, angle, round(float(np.median([h[1] for h in hits])), 1), round(tutor, 1),
-        round(float(np.median([h[2] for h in hits])), 1), tuple(h[0] + 1 for h in hits),
+        kind, angle, round(float(statistics.median([h[1] for h in hits])), 1), round(tutor, 1),
+        round(float(statistics.median([h[2] for h in hits])), 1), tuple(h[0] + 1 for h in hits),
         -1, len(hits) / total,
     )  # fmt: skip
 

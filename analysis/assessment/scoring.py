@@ -53,6 +53,7 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.dtw import DTWOptions, align
+from analysis.dtw.nearest import closest_paths
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -90,14 +91,18 @@ def _along_path(segment: FloatArray, template: FloatArray, path: IntArray) -> Fl
 def _closest(segment: FloatArray, templates: Sequence[FloatArray]) -> tuple[FloatArray, int]:
     """Deviation vector (J,) to the closest template (smallest mean path cost) and its index;
     the deviations are measured along the closest template's path only."""
-    best: tuple[float, IntArray, int] | None = None
-    for k, template in enumerate(templates):
-        result = align(segment, template, _OPTIONS)
-        cost = result.cost / len(result.path)
-        if best is None or cost < best[0]:
-            best = (cost, result.path, k)
-    assert best is not None
-    return _along_path(segment, templates[best[2]], best[1]), best[2]
+    return _closest_all([segment], templates)[0]
+
+
+def _closest_all(
+    segments: Sequence[FloatArray], templates: Sequence[FloatArray]
+) -> list[tuple[FloatArray, int]]:
+    """`_closest` of every segment, their alignments in one compiled call."""
+    found = closest_paths(segments, templates)
+    return [
+        (_along_path(s, templates[k], path), k)
+        for s, (k, path) in zip(segments, found, strict=True)
+    ]
 
 
 def deviations(segment: FloatArray, templates: Sequence[FloatArray]) -> FloatArray:
@@ -114,8 +119,17 @@ def joint_reach(movement: FloatArray) -> FloatArray:
 def repetition_features(segment: FloatArray, templates: Sequence[FloatArray]) -> FloatArray:
     """(2J,): the deviation vector to the closest tutor repetition, then each joint's reach minus
     its reach in that repetition (see the module docstring); both in body sizes."""
-    dev, k = _closest(segment, templates)
-    return np.concatenate([dev, joint_reach(segment) - joint_reach(templates[k])])
+    return repetition_features_all([segment], templates)[0]
+
+
+def repetition_features_all(
+    segments: Sequence[FloatArray], templates: Sequence[FloatArray]
+) -> list[FloatArray]:
+    """`repetition_features` of every segment (a recording's repetitions), aligned at once."""
+    return [
+        np.concatenate([dev, joint_reach(segment) - joint_reach(templates[k])])
+        for segment, (dev, k) in zip(segments, _closest_all(segments, templates), strict=True)
+    ]
 
 
 def repetition_distance(segment: FloatArray, templates: Sequence[FloatArray]) -> float:

@@ -160,6 +160,14 @@ def shoulder_rotation(
 ) -> FloatArray:
     """Axial rotation of the upper arm, internal positive (module docstring), degrees per
     frame; NaN where the elbow is nearly straight or the arm near straight up."""
+    return _mostly_undefined(_rotation_read(thorax, arm, forearm, side))
+
+
+def _rotation_read(
+    thorax: FloatArray, arm: FloatArray, forearm: FloatArray, side: str
+) -> FloatArray:
+    """`shoulder_rotation` of each frame alone (before the share of defined frames is
+    checked)."""
     reference = _carried(thorax[..., 0], -thorax[..., 1], arm)
     outward = np.cross(arm, reference)  # to the body's right for either arm hanging
     turned = np.degrees(
@@ -171,17 +179,23 @@ def shoulder_rotation(
     elbow = _between(arm, forearm)
     bent = (elbow >= ROTATION_ELBOW_DEG[0]) & (elbow <= ROTATION_ELBOW_DEG[1])
     defined = bent & (elevation <= PLANE_DEFINED[1])
-    return _mostly_undefined(np.where(defined, turned, np.nan))
+    return np.where(defined, turned, np.nan)
 
 
 def plane_of_elevation(thorax: FloatArray, arm: FloatArray, side: str) -> FloatArray:
     """The direction the arm is raised in (module docstring), degrees per frame; NaN where
     the arm hangs or points nearly straight up."""
+    return _mostly_undefined(_plane_read(thorax, arm, side))
+
+
+def _plane_read(thorax: FloatArray, arm: FloatArray, side: str) -> FloatArray:
+    """`plane_of_elevation` of each frame alone (before the share of defined frames is
+    checked)."""
     elevation, plane = shoulder_globe(thorax, arm, side)
     defined = (elevation >= PLANE_DEFINED[0]) & (elevation <= PLANE_DEFINED[1])
     # across the body reads past 90 (not −180..−90): the arm sweeps on from forward
     plane = np.where(plane < -135.0, plane + 360.0, plane)
-    return _mostly_undefined(np.where(defined, plane, np.nan))
+    return np.where(defined, plane, np.nan)
 
 
 def _stands_on(geo: Geometry, shank: str) -> bool:
@@ -234,42 +248,71 @@ def ankle_zero(geo: Geometry, side: str) -> tuple[float | None, str]:
     return None, "the person never stands with a straight knee in it to measure the foot from"
 
 
-def _limb_angles(geo: Geometry, side: str) -> dict[str, FloatArray]:
-    axes, out = geo.axes, {}
+def _limb_angles(axes: dict[str, FloatArray], side: str) -> dict[str, FloatArray]:
+    out = {}
     pairs = {"knee_flexion": ("thigh", "shank"), "elbow_flexion": ("upper_arm", "forearm")}
     for name, (a, b) in pairs.items():
         if f"{a}_{side}" in axes and f"{b}_{side}" in axes:
             out[f"{name}_{side}"] = _between(axes[f"{a}_{side}"], axes[f"{b}_{side}"])
     shank, foot = f"shank_{side}", f"foot_{side}"
-    neutral = ankle_zero(geo, side)[0] if shank in axes and foot in axes else None
-    if neutral is not None:
-        out[f"ankle_dorsiflexion_{side}"] = neutral - _between(-axes[shank], axes[foot])
+    if shank in axes and foot in axes:  # the shank–foot angle, before the ankle's zero
+        out[f"{ANKLE_BEND}{side}"] = _between(-axes[shank], axes[foot])
     return out
 
 
 def _shoulder(thorax: FloatArray, axes: dict[str, FloatArray], side: str) -> dict[str, FloatArray]:
     arm = axes[f"upper_arm_{side}"]
     out = shoulder_angles(thorax, arm, side)
-    out[f"shoulder_plane_of_elevation_{side}"] = plane_of_elevation(thorax, arm, side)
+    out[f"{READ}shoulder_plane_of_elevation_{side}"] = _plane_read(thorax, arm, side)
     if f"forearm_{side}" in axes:
-        out[f"shoulder_rotation_{side}"] = shoulder_rotation(
+        out[f"{READ}shoulder_rotation_{side}"] = _rotation_read(
             thorax, arm, axes[f"forearm_{side}"], side
         )
     return out
 
 
-def angles_of(geo: Geometry) -> dict[str, FloatArray]:
-    """Every angle the geometry gives, degrees per frame, in `ANGLE_NAMES` order."""
+ANKLE_BEND = "ankle_bend_"  # `frame_angles`' shank–foot angle, "ankle_bend_left"
+READ = "read:"  # `frame_angles`' angles before the share of frames defining them is checked
+
+
+def frame_angles(geo: Geometry) -> dict[str, FloatArray]:
+    """The angles of each frame that read that frame alone and not the take's vertical
+    (degrees per frame): the limbs, hips and shoulders, the shoulder's plane of elevation and
+    rotation as read (`READ`), the ankle's shank–foot angle before its zero (`ANKLE_BEND`).
+    `take_angles` turns them into the recording's angles; a live session keeps them frame by
+    frame, as the frames arrive, and runs only `take_angles` over every frame so far."""
     out: dict[str, FloatArray] = {}
     for side in SIDES:
-        out.update(_limb_angles(geo, side))
+        out.update(_limb_angles(geo.axes, side))
         if geo.pelvis is not None and f"thigh_{side}" in geo.axes:
             out.update(hip_angles(geo.pelvis, geo.axes[f"thigh_{side}"], side))
         if geo.thorax is not None and f"upper_arm_{side}" in geo.axes:
             out.update(_shoulder(geo.thorax, geo.axes, side))
+    return out
+
+
+def take_angles(geo: Geometry, each: dict[str, FloatArray]) -> dict[str, FloatArray]:
+    """Every angle the geometry gives (`angles_of`) from its frames' `frame_angles` (``each``,
+    of the same frames): the steps that read the whole take run here (the share of frames a
+    shoulder angle is defined in, the ankle's zero from the standing frames, the trunk against
+    the take's vertical)."""
+    out = {k: v for k, v in each.items() if not k.startswith((READ, ANKLE_BEND))}
+    for name, values in each.items():
+        if name.startswith(READ):
+            out[name.removeprefix(READ)] = _mostly_undefined(values)
+    for side in SIDES:
+        bend = each.get(f"{ANKLE_BEND}{side}")
+        neutral = ankle_zero(geo, side)[0] if bend is not None else None
+        if bend is not None and neutral is not None:
+            out[f"ankle_dorsiflexion_{side}"] = neutral - bend
     if geo.pelvis is not None and geo.thorax is not None:
         out.update(trunk_angles(geo.pelvis, geo.thorax, geo.up))
     return {name: out[name] for name in ANGLE_NAMES if name in out}
+
+
+def angles_of(geo: Geometry) -> dict[str, FloatArray]:
+    """Every angle the geometry gives, degrees per frame, in `ANGLE_NAMES` order."""
+    return take_angles(geo, frame_angles(geo))
 
 
 def _ankle_notes(geo: Geometry, given: dict[str, FloatArray]) -> dict[str, str]:

@@ -1,7 +1,8 @@
 """Offline time warping: options, compiled kernels, frame costs with joint
 weights, CMA-ES joint weights, and the alignment and similarity metrics.
 
-Pipeline: repetition scoring aligns each repetition with the tutor's through `align`.
+Pipeline: repetition scoring aligns each repetition with every tutor repetition through
+`nearest.closest_paths` (`align` for each pair, in one compiled call).
 """
 
 from analysis.dtw.frame_costs import (

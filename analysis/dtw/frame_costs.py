@@ -360,11 +360,12 @@ def path_groups(path: IntArray) -> list[tuple[int, int]]:
     Scanning from the start, a run extends while the next cell keeps the run's shared index; a
     cell that could start either kind of run starts the one its successor continues (j first).
     """
-    groups, s, n = [], 0, len(path)
+    cells = np.asarray(path).tolist()  # Python ints: a numpy element read costs ten times more
+    groups, s, n = [], 0, len(cells)
     while s < n:
         e = s + 1
         for axis in (1, 0):
-            while e < n and path[e, axis] == path[s, axis]:
+            while e < n and cells[e][axis] == cells[s][axis]:
                 e += 1
             if e > s + 1:
                 break

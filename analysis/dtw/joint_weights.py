@@ -25,6 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from analysis.dtw.frame_costs import as_frames, cost_matrix, n_joints
+from analysis.dtw.joint_terms import JointTerms
 from analysis.dtw.offline import DPState, DTWOptions, band_limits
 
 if TYPE_CHECKING:
@@ -110,12 +111,15 @@ class JointWeightOptimizer:
         ref: FloatArray,
         labels: list[IntArray],
         ref_labels: IntArray,
+        *,
+        terms: Sequence[JointTerms] = (),
     ) -> float:
-        """Eq 5 averaged over the recordings, for joint weights w."""
+        """Eq 5 averaged over the recordings, for joint weights w; ``terms``: the recordings'
+        per-joint quaternion terms (`analysis.dtw.joint_terms`), when the cost is quaternion."""
         opt = replace(self.options, weights=None)
         errors = []
-        for x, lab in zip(frames, labels, strict=True):
-            C = cost_matrix(x, ref, opt.cost, w)
+        for k, (x, lab) in enumerate(zip(frames, labels, strict=True)):
+            C = terms[k].costs(w) if terms else cost_matrix(x, ref, opt.cost, w)
             errors.append(alignment_error(aligned_pairs(C, opt, self.target), lab, ref_labels))
         return float(np.mean(errors))
 
@@ -145,8 +149,12 @@ class JointWeightOptimizer:
         groups = None if self.joints is None else np.ones(self.joints)
         J = n_joints(ref.shape[1], self.options.cost, groups)
 
+        # only the weights change between evaluations: each joint's quaternion terms once
+        quaternion = self.options.cost == "quaternion"
+        terms = [JointTerms(x, ref) for x in frames] if quaternion else []
+
         def error(w: FloatArray) -> float:
-            return self._error(np.abs(w), frames, ref, lab, ref_lab)
+            return self._error(np.abs(w), frames, ref, lab, ref_lab, terms=terms)
 
         self.initial_error_ = error(np.ones(J))
         es = self._strategy(J)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 import numpy.typing as npt
 
@@ -70,19 +71,38 @@ def _correlations(A: FloatArray, B: FloatArray, method: str) -> FloatArray:
 def kendall_tau_b(A: FloatArray, B: FloatArray, block: int = 64) -> FloatArray:
     """Kendall's tau-b of every column pair of A, B (K, c) at once (as scipy's ``kendalltau``,
     ties included): Σ sgn(Δa)·sgn(Δb) over all pairs of rows, over the square root of the
-    products of the untied pair counts. Rows are taken ``block`` at a time to bound memory."""
-    K, c = A.shape
-    concordance = np.zeros(c)
-    untied_a = np.zeros(c)
-    untied_b = np.zeros(c)
-    for lo in range(0, K, block):
-        da = np.sign(A[lo : lo + block, None, :] - A[None, :, :])
-        db = np.sign(B[lo : lo + block, None, :] - B[None, :, :])
-        concordance += np.einsum("ijc,ijc->c", da, db)
-        untied_a += np.count_nonzero(da, axis=(0, 1))
-        untied_b += np.count_nonzero(db, axis=(0, 1))
-    # every unordered pair was counted twice (i, j) and (j, i): the factor cancels
+    products of the untied pair counts. ``block`` is kept for callers of the former numpy
+    version (rows taken that many at a time); the compiled counts need no blocks."""
+    del block
+    counts = _pair_counts(np.ascontiguousarray(A, dtype=np.float64),
+                          np.ascontiguousarray(B, dtype=np.float64))  # fmt: skip
+    concordance, untied_a, untied_b = counts[0], counts[1], counts[2]
     return np.asarray(concordance / np.sqrt(np.maximum(untied_a * untied_b, 1e-300)))
+
+
+@nb.njit(cache=True, nogil=True)
+def _pair_counts(A: FloatArray, B: FloatArray) -> FloatArray:
+    """(3, c): per column, Σ sgn(Δa)·sgn(Δb) and the untied pair counts of A and of B, over the
+    ordered pairs of different rows (each unordered pair twice, as the former numpy sums
+    counted them). Whole numbers, so the order of the sums cannot change a bit."""
+    K, c = A.shape
+    out = np.zeros((3, c))
+    for col in range(c):
+        concordant, tied_a, tied_b = 0, 0, 0
+        for i in range(K):
+            a, b = A[i, col], B[i, col]
+            for j in range(i + 1, K):
+                da, db = a - A[j, col], b - B[j, col]
+                sa = (da > 0.0) - (da < 0.0)
+                sb = (db > 0.0) - (db < 0.0)
+                concordant += sa * sb
+                tied_a += sa == 0
+                tied_b += sb == 0
+        pairs = K * (K - 1) // 2
+        out[0, col] = 2.0 * concordant
+        out[1, col] = 2.0 * (pairs - tied_a)
+        out[2, col] = 2.0 * (pairs - tied_b)
+    return out
 
 
 def kendall_tau_score(

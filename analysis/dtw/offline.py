@@ -82,7 +82,7 @@ from analysis.dtw.row_blocks import concurrently, cuts, run_rows
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 StepKind = Literal["symmetric", "type-v"]
-_DIAGONAL_MAX_DIM = 8  # the anti-diagonal sweep recomputes costs per diagonal: few features only
+DIAGONAL_MAX_DIM = 8  # the anti-diagonal sweep recomputes costs per diagonal: few features only
 
 
 @dataclass(frozen=True)
@@ -277,7 +277,7 @@ def _diagonal_sweep(opt: DTWOptions, ci: CostInputs) -> bool:
     closed = opt == DTWOptions(
         cost=opt.cost, speed_insensitive=opt.speed_insensitive, return_matrix=opt.return_matrix
     )
-    return closed and ci.mode in (MODE_EUC, MODE_SQ) and ci.x.shape[1] <= _DIAGONAL_MAX_DIM
+    return closed and ci.mode in (MODE_EUC, MODE_SQ) and ci.x.shape[1] <= DIAGONAL_MAX_DIM
 
 
 def _diagonal_inputs(ci: CostInputs) -> tuple[FloatArray, FloatArray]:

@@ -200,6 +200,37 @@ def forward(
     return _chain(q, t, skeleton.parents)
 
 
+def forward_positions(skeleton: Skeleton, local_q: FloatArray, local_t: FloatArray) -> FloatArray:
+    """``forward(...)[1]`` (the same bits) without the (F, J, 4) global rotations: each frame's
+    are kept in a (J, 4) scratch, which saves their memory traffic (the playback skeletons)."""
+    _check_parent_order(skeleton)
+    q = np.ascontiguousarray(local_q, dtype=np.float64)
+    t = np.ascontiguousarray(local_t, dtype=np.float64)
+    return _chain_positions(q, t, skeleton.parents)
+
+
+@numba.njit(cache=True, nogil=True)
+def _chain_positions(
+    local_q: FloatArray, local_t: FloatArray, parents: npt.NDArray[np.int64]
+) -> FloatArray:
+    """`_chain`'s positions: the same products in the same order, frame by frame."""
+    n_frames, n_joints = local_q.shape[0], local_q.shape[1]
+    glob = np.empty((n_joints, 4))
+    pos = np.empty_like(local_t)
+    for f in range(n_frames):
+        for j in range(n_joints):
+            p = parents[j]
+            bw, bx, by, bz = local_q[f, j, 0], local_q[f, j, 1], local_q[f, j, 2], local_q[f, j, 3]
+            tx, ty, tz = local_t[f, j, 0], local_t[f, j, 1], local_t[f, j, 2]
+            if p < 0:
+                glob[j, 0], glob[j, 1], glob[j, 2], glob[j, 3] = bw, bx, by, bz
+                pos[f, j, 0], pos[f, j, 1], pos[f, j, 2] = tx, ty, tz
+                continue
+            _compose(glob[p], (bw, bx, by, bz), glob[j])
+            _place(glob[p], pos[f, p], (tx, ty, tz), pos[f, j])
+    return pos
+
+
 def world(motion: Motion) -> tuple[FloatArray, FloatArray]:
     """Global rotations (F, J, 4) and world positions (F, J, 3) in one pass."""
     return forward(motion.skeleton, rotations(motion), translations(motion))

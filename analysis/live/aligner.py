@@ -38,6 +38,7 @@ from analysis.kinematics import quaternions as quat
 from analysis.kinematics.forward_kinematics import UP_AXIS
 from analysis.live.frame_kernels import MIRROR_Q, FeatureLayout, FrameStore
 from analysis.live.judged import RepetitionJudge, guidance_events
+from analysis.live.tutor import tutor_of
 from analysis.live.words import Event, repetition_words
 from analysis.online.aligners import ForwardPlotAligner, ForwardPlotOptions, OpenEndAligner
 from analysis.online.counting import Counted, RepetitionCounter
@@ -47,7 +48,6 @@ from analysis.pipeline.gestures import (
     Pace,
     align_gesture,
     guidance,
-    reference_excursion,
     repetition_pace,
     usual_pace,
 )
@@ -141,20 +141,10 @@ class LiveAligner:
     # --- set-up -------------------------------------------------------------------------------
 
     def _setup_tutor(self) -> None:
-        parts = self.model.components
-        joints = [j for j in parts.involved_index if j != 0] or list(parts.involved_index)
-        self._joints = np.asarray(joints, dtype=np.intp)
-        a, b = parts.tutor_reps[0] if parts.tutor_reps else (0, self.model.tutor.n_frames - 1)
-        self.tutor_start, self.tutor_end = int(a), int(b)
-        tutor = FrameKinematics(self.model.tutor.skeleton).rotations(self.model.tutor.frames)
-        q = tutor[a : b + 1][:, self._joints]
-        self._tutor_q = quat.make_continuous(q).reshape(b - a + 1, -1)
-        weights = getattr(parts, "joint_weights", None)
-        self._weights = None if weights is None else tuple(np.asarray(weights)[self._joints])
-        reps, papers = parts.tutor_reps or [(a, b)], parts.papers
-        mirror_q = tutor[:, [parts.mirror[j] for j in papers.joint_index]]
-        self._reference = reference_excursion(papers.tutor_q, mirror_q, reps, parts.scoring_step)
-        self._reference_frames = float(np.median([e - s + 1 for s, e in reps]))
+        tutor = tutor_of(self.model)
+        self._joints, self._tutor_q, self._weights = tutor.joints, tutor.q, tutor.weights
+        self.tutor_start, self.tutor_end = tutor.start, tutor.end
+        self._reference, self._reference_frames = tutor.reference, tutor.reference_frames
 
     def _setup_aligners(self) -> None:
         m = self._tutor_q.shape[0]

@@ -5,6 +5,7 @@ patient hears live are the reasons the recording's page gives for the same frame
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
 
 import numpy as np
@@ -13,7 +14,7 @@ import numpy.typing as npt
 from analysis.assessment.compensations import checked, raw_series
 from analysis.bvh import Motion, Skeleton
 from analysis.clinical import angle_ranges
-from analysis.clinical.angles import angles_of
+from analysis.clinical.angles import frame_angles, take_angles
 from analysis.clinical.body import Geometry, find_body, geometry, take_vertical
 from analysis.clinical.measured import within_limits
 from analysis.kinematics import kinematics
@@ -22,7 +23,7 @@ from analysis.kinematics.posefeatures import body_scale
 from analysis.pipeline.advice_stage import facts_of, judge_of, repetition_measures
 from analysis.pipeline.clinical_stage import rounded
 from analysis.pipeline.gestures import Pace
-from analysis.pipeline.judgement import GUIDANCE_TEXT, Judgement, judge
+from analysis.pipeline.judgement import GUIDANCE_TEXT, Judge, Judgement, judge
 from analysis.pipeline.model import FittedModel
 from analysis.pipeline.prepare import mirrored
 from analysis.pipeline.results import Guidance, RepetitionResult
@@ -66,6 +67,17 @@ class _Rows:
         return list(self._arrays)
 
 
+_JUDGES: weakref.WeakKeyDictionary[FittedModel, dict[bool, Judge]] = weakref.WeakKeyDictionary()
+
+
+def _judge_of(model: FittedModel, mirrored: bool) -> Judge:
+    """`judge_of`, made once per model and side (it reads only the model, and is frozen)."""
+    sides = _JUDGES.setdefault(model, {})
+    if mirrored not in sides:
+        sides[mirrored] = judge_of(model, mirrored)
+    return sides[mirrored]
+
+
 class RepetitionJudge:
     """Judges the repetitions of one stream: frames are the stream's BVH channel values at the
     model's rate (`add`), a repetition is model-rate frames a..b (`judge`).
@@ -74,21 +86,22 @@ class RepetitionJudge:
     every frame (the mean heading and median body size the score is taken over, the share of
     frames beyond the body's limits that leaves a clinical angle out, the ankle's zero from the
     standing frames, the take's vertical). Each frame's forward kinematics, trunk frames, limb
-    axes and compensations as read are computed once, at the first repetition's end after it
-    (`_caught_up`), and only the whole-recording steps run over the frames so far: the same
-    numbers, to the last bit, as measuring every frame again (`tests/live/test_repetition_end`),
-    since each of those per-frame steps gives a frame the same values whatever frames are
-    computed with it. The clinical angles themselves (`angles_of`) are still read over every
-    frame so far: the ankle's zero and a shoulder angle's share of defined frames are taken
-    inside that reading."""
+    axes, clinical angles (`frame_angles`) and compensations as read are computed once, at the
+    first repetition's end after it (`_caught_up`), and only the whole-recording steps run over
+    the frames so far (`take_angles`: the ankle's zero, a shoulder angle's share of defined
+    frames, the trunk against the take's vertical; the limits; the compensations' checks): the
+    same numbers, to the last bit, as measuring every frame again
+    (`tests/live/test_repetition_end`), since each of those per-frame steps gives a frame the
+    same values whatever frames are computed with it."""
 
     def __init__(self, model: FittedModel, skeleton: Skeleton, mirrored: bool = False) -> None:
         self.model, self.skeleton = model, skeleton
-        self._judge = judge_of(model, mirrored)
+        self._judge = _judge_of(model, mirrored)
         self._body = find_body(skeleton)
         self._frames = _Rows()  # channel values
         self._kin = _Rows()  # world positions and the heading, of the frames done
         self._geo = _Rows()  # `Geometry`'s trunk frames and limb axes, of the frames done
+        self._each = _Rows()  # `frame_angles` of the frames done
         self._bent = _Rows()  # the compensations as read (`raw_series`), of the frames done
         self._bent_up: FloatArray | None = None  # the vertical they were read about
         self._frame_time = 1.0 / model.fps
@@ -101,7 +114,7 @@ class RepetitionJudge:
     def set_side(self, mirrored: bool) -> None:
         """The patient uses the other side (mirror image) from now on."""
         if mirrored != self._judge.mirrored:
-            self._judge = judge_of(self.model, mirrored)
+            self._judge = _judge_of(self.model, mirrored)
 
     def _motion(self, b: int) -> Motion:
         """Frames 0..b."""
@@ -123,6 +136,7 @@ class RepetitionJudge:
                 **{f"axis {k}": v for k, v in geo.axes.items()},
             )
             self._rest_axes = geo.rest_axes
+            self._each.extend(**frame_angles(geo))
         return self._kin["positions"][: b + 1]
 
     def _vertical(self, positions: FloatArray) -> FloatArray:
@@ -140,7 +154,8 @@ class RepetitionJudge:
             parts.get("pelvis"), parts.get("thorax"), axes, self._rest_axes,
             self._vertical(positions), self._body.upright,
         )  # fmt: skip
-        return within_limits(angles_of(geo)).series
+        each = {name: self._each[name][: b + 1] for name in self._each.names}
+        return within_limits(take_angles(geo, each)).series
 
     def _compensations(self, positions: FloatArray, b: int) -> dict[str, FloatArray]:
         """`tutor_parts.compensations` of frames 0..b: each frame read once about the take's

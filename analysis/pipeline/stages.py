@@ -15,7 +15,7 @@ from analysis.assessment import landmark_features, repetition_features, update_l
 from analysis.assessment.findings import findings, tutor_ranges, tutor_spreads
 from analysis.assessment.joints import N_LEVELS
 from analysis.assessment.limbs import arm_first
-from analysis.assessment.scoring import MISSED_CAP, missed_key_pose
+from analysis.assessment.scoring import MISSED_CAP, missed_key_pose, repetition_features_all
 from analysis.clinical import angle_ranges, angle_series
 from analysis.feedback import Comment, Grammar, LandmarkAssessment
 from analysis.feedback.advice import MAX_CORRECTIONS, Advice, advise
@@ -75,10 +75,15 @@ def scoring_features(
     recording's (F, J, 3) scaled positions (`scaled_positions`; the tutor's side): the movement
     of the scored joints since the repetition began against the tutor's repetitions. Offline and
     live (`analysis.live.judged`) alike; ``templates``: `scoring_templates` when already made."""
-    movement = flatten(np.take(points[start : end + 1], parts.scored_index, axis=1))
-    segment = relative_to_start(movement)
     thinned = scoring_templates(parts) if templates is None else templates
-    return repetition_features(segment[:: parts.scoring_step], thinned)
+    return repetition_features(scoring_segment(points, start, end, parts), thinned)
+
+
+def scoring_segment(points: FloatArray, start: int, end: int, parts: ModelComponents) -> FloatArray:
+    """Frames start..end of the scored joints' positions, relative to the first, at the scoring
+    rate: what `scoring_features` compares with the tutor's repetitions."""
+    movement = flatten(np.take(points[start : end + 1], parts.scored_index, axis=1))
+    return relative_to_start(movement)[:: parts.scoring_step]
 
 
 def scoring_templates(parts: ModelComponents) -> list[FloatArray]:
@@ -102,12 +107,17 @@ def repetition_results(  # noqa: PLR0917 (the stage's inputs, as run.py holds th
     parts = model.components
     threshold = parts.papers.threshold.value
     tutor_frames = float(np.median([len(t) for t in parts.templates]))
-    templates = scoring_templates(parts)
+    # every repetition's features at once: their alignments with the tutor's are one call
+    all_features = repetition_features_all(
+        [scoring_segment(prepared.points, int(a), int(b), parts)
+         for a, b in zip(segments.starts, segments.ends, strict=True)],
+        scoring_templates(parts),
+    )  # fmt: skip
     out = []
     for k, (start, end, peak) in enumerate(
         zip(segments.starts, segments.ends, segments.peaks, strict=True)
     ):
-        features = scoring_features(prepared.points, int(start), int(end), parts, templates)
+        features = all_features[k]
         dev = features[: len(parts.scored_index)]
         score = parts.scorer.score(features)
         inside = [a.levels for a in assessment if start < a.frame <= end and a.type != 1]

@@ -169,7 +169,8 @@ class LiveConsumer(AsyncWebsocketConsumer):
         except ProtocolError as error:
             await self.send_json(error_event(error))
             return
-        state = await self._state_or_error()
+        # the session's state, made at its first message (the await only then)
+        state = SESSIONS.get(self.key) or await self._state_or_error()
         stream = camera.CAMERAS.get(self.key)
         if state is not None and stream is not None:  # landmarks from the camera page
             events = camera.take(state, stream, block)
@@ -182,33 +183,26 @@ class LiveConsumer(AsyncWebsocketConsumer):
         self, state: SessionState, events: list[dict[str, Any]], received: float, *, batch: bool
     ) -> None:
         """Send a message's events (a batch's in one JSON array), show them to the group."""
-        for event in events:
-            if event["event"] == "position":
-                event["latency_ms"] = round((time.perf_counter() - received) * 1000.0, 3)
-                state.delivery_ms.append(event["latency_ms"])
-            elif event["event"] == "summary":
-                await self._finish(state, event)
-            elif event["event"] == "ready":
-                _ready(event)
+        repetitions, summary = _stamped(state, events, received)
+        if summary is not None:
+            await self._finish(state, summary)
         if batch:
             if events:
                 await self.send(text_data=_dumps(events))
         else:
             for event in events:
                 await self.send_json(event)
-        for event in events:
-            await self._broadcast(state, event)
-        await self._note_activity(events)
-
-    async def _note_activity(self, events: list[dict[str, Any]]) -> None:
-        """Write that frames are arriving: at once for a new repetition, otherwise at most
-        every `ACTIVITY_EVERY` seconds (not a database write per frame)."""
-        counts = [int(e["index"]) + 1 for e in events if e["event"] == "repetition"]
+        if self.watched():
+            for event in events:
+                await self._broadcast(state, event)
         now = time.monotonic()
-        if not counts and now - self.activity_at < ACTIVITY_EVERY:
-            return
+        if repetitions is not None or now - self.activity_at >= ACTIVITY_EVERY:
+            await self._note_activity(now, repetitions)
+
+    async def _note_activity(self, now: float, repetitions: int | None) -> None:
+        """Write that frames are arriving: at once for a new repetition, otherwise at most
+        every `ACTIVITY_EVERY` seconds (not a database write per frame; `_answer` decides)."""
         self.activity_at = now
-        repetitions = max(counts) if counts else None
         await database_sync_to_async(services.record_activity)(self.key, repetitions)
 
     async def _state_or_error(self) -> SessionState | None:
@@ -263,8 +257,8 @@ class LiveConsumer(AsyncWebsocketConsumer):
         return CONNECTIONS.get(self.key, 0) > 1 or self.heard_other
 
     async def _broadcast(self, state: SessionState, event: dict[str, Any]) -> None:
-        if not self.watched():
-            return
+        """Show one event to the session's other connections (`_answer` calls this only while
+        someone watches)."""
         if event["event"] == "position" and state.aligner is not None:
             poses = state.aligner.poses()
             if poses is not None:
@@ -310,6 +304,27 @@ class LiveConsumer(AsyncWebsocketConsumer):
         except Exception:  # a replay must never take the server down
             log.exception("replay of live session %s failed", self.key)
             await self.send_json(_error("replay-failed", "the replay stopped"))
+
+
+def _stamped(
+    state: SessionState, events: list[dict[str, Any]], received: float
+) -> tuple[int | None, dict[str, Any] | None]:
+    """A message's events made ready to send, in one pass: each position event's time in the
+    consumer, the binary form a ``ready`` event's server reads; returned: the newest
+    repetition's count (None: the message ended none) and the ``summary`` event, if any."""
+    repetitions = summary = None
+    for event in events:
+        kind = event["event"]
+        if kind == "position":
+            event["latency_ms"] = round((time.perf_counter() - received) * 1000.0, 3)
+            state.delivery_ms.append(event["latency_ms"])
+        elif kind == "repetition":
+            repetitions = int(event["index"]) + 1
+        elif kind == "summary":
+            summary = event
+        elif kind == "ready":
+            _ready(event)
+    return repetitions, summary
 
 
 def _ready(event: dict[str, Any]) -> dict[str, Any]:
