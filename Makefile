@@ -111,11 +111,12 @@ bench: $(VENV)/.stamp-bench
 
 # Concurrent live sessions at 120 frames/s under `make run`'s server and Daphne with the Redis
 # channel layer (Redis on 127.0.0.1:6379), then the live sessions against the offline analysis.
+# Each writes its table to docs/sections/; the dated figures in docs/PERFORMANCE.md and
+# docs/EVALUATION.md are copied from there by hand, with the day's machine and load.
 bench-live: $(VENV)/.stamp-bench
 	$(BIN)/python -m bench.bench_live --servers runserver,redis,uvicorn --counts 20,35,50,70,100,140 --proxy \
 		--seconds 8 --batch 3 --markdown docs/sections/bench_live.md
 	$(BIN)/python -m bench.eval_live --jobs 2 --markdown docs/sections/eval_live.md
-	$(BIN)/python docs/assemble.py
 
 # Browser figures (frame rate, time to interactive) and screenshots into docs/img/.
 bench-browser: deps

@@ -97,7 +97,8 @@ def _context(args: argparse.Namespace) -> MatchContext:
 def run_analysis(args: argparse.Namespace) -> int:
     model = load_model(Path(args.model).read_bytes())
     recording = load(args.recording)
-    result = analyse(recording.motion, model, match=_context(args))
+    context = _context(args)
+    result = analyse(recording.motion, model, match=context, lost_frames=recording.lost_frames)
     summary = dataclasses.replace(result.summary, source=recording.source)
     result = dataclasses.replace(result, summary=summary)
     print(json.dumps(result.to_json(), indent=2 if not args.json else None))

@@ -8,7 +8,8 @@ its pass threshold).
 
     python -m bench.eval_recorders [--jobs 1] [--exercises m01,m04] [--subjects s01]
         [--models kinect,vicon]
-    python -m bench.eval_recorders --keraal     # the KERAAL samples' counts and angles
+    python -m bench.eval_recorders --keraal     # the KERAAL samples' counts and angles, and
+                                                # the Kinect's with its lost shoulders kept in
 
 Candidate scoring features are tried on these pairs in minutes with
 `bench/eval_recorder_candidates.py`.
@@ -158,24 +159,42 @@ KERAAL = Path(__file__).resolve().parents[1] / "tests" / "analysis" / "fixtures"
 KERAAL_ANGLES = ("shoulder_elevation_left", "shoulder_elevation_right", "trunk_lateral_flexion")
 
 
+def kept_in(motion: Motion, model: FittedModel) -> str:
+    """The shoulder elevation ranges with the lost shoulders' frames kept in (as before the
+    import marked them)."""
+    angles = analyse(motion, model).summary.clinical_angles
+    spans = [angles.get(f"shoulder_elevation_{side}") for side in ("left", "right")]
+    return " / ".join(f"{a.min:.0f} to {a.max:.0f}°" if a else "-" for a in spans)
+
+
 def keraal() -> None:
     """The KERAAL samples (docs/CAPTURE_SOURCES.md): each exercise made from its Kinect take (key
-    poses suggested on it), its Kinect, Vicon and BlazePose files counted and measured."""
+    poses suggested on it), its Kinect, Vicon and BlazePose files counted and measured; and the
+    frames where the Kinect lost a shoulder (marked at import, `analysis.sources.ik.lost_shoulders`,
+    left out of that shoulder's angles) and its shoulder elevation with them kept in."""
     recorders = ("Kinect", "Vicon", "BP")
     for exercise in ("CTK", "ELK", "RTK"):
-        motions = {}
+        taken = {}
         for recorder in recorders:
             path = next(KERAAL.glob(f"G3-{recorder}-{exercise}-*"))
-            motions[recorder] = read_recording(path.name, path.read_bytes()).motion
-        poses = suggest_key_poses(motions["Kinect"])
-        model = build_model(motions["Kinect"], poses.frames.tolist(), poses.types.tolist())
-        found = {r: analyse(m, model).summary for r, m in motions.items()}
+            taken[recorder] = read_recording(path.name, path.read_bytes())
+        kinect = taken["Kinect"].motion
+        poses = suggest_key_poses(kinect)
+        model = build_model(kinect, poses.frames.tolist(), poses.types.tolist())
+        found = {
+            r: analyse(t.motion, model, lost_frames=t.lost_frames).summary for r, t in taken.items()
+        }
         counts = " / ".join(str(found[r].repetition_count) for r in recorders)
         print(f"{exercise}: repetitions Kinect / Vicon / BlazePose {counts}")
         for name in KERAAL_ANGLES:
             spans = [found[r].clinical_angles.get(name) for r in recorders]
             text = " / ".join(f"{a.min:.0f} to {a.max:.0f}°" if a else "-" for a in spans)
             print(f"  {name}: {text}")
+        lost = taken["Kinect"].lost_frames
+        left_out = " / ".join(str(int(lost[f"{s}_shoulder"].sum())) if f"{s}_shoulder" in lost
+                              else "0" for s in ("left", "right"))  # fmt: skip
+        print(f"  Kinect frames with a lost shoulder (left / right): {left_out}; its shoulder "
+              f"elevation with them kept in: {kept_in(kinect, model)}")  # fmt: skip
 
 
 def main() -> None:

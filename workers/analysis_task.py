@@ -129,7 +129,7 @@ def compute(run: AnalysisRun, token: str) -> tuple[AnalysisResult, Any]:
     match = match_context(recording.exercise, imported.source.kind)
     result = analyse(
         motion, model, history=history, on_progress=on_progress, limits=limits,
-        match=match, own_pace=earlier_pace(recording),
+        match=match, own_pace=earlier_pace(recording), lost_frames=imported.lost_frames,
     )  # fmt: skip
     summary = dataclasses.replace(result.summary, source=imported.source)
     return dataclasses.replace(result, summary=summary), model_row

@@ -47,7 +47,10 @@ upper arm's axial rotation is read from where the bent forearm points.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
+import numpy.typing as npt
 
 from analysis.bvh import Motion
 from analysis.clinical.body import (
@@ -60,7 +63,13 @@ from analysis.clinical.body import (
     geometry,
     unit,
 )
-from analysis.clinical.measured import NOT_MEASURABLE, Measured, missing_notes, within_limits
+from analysis.clinical.measured import (
+    NOT_MEASURABLE,
+    Measured,
+    missing_notes,
+    within_limits,
+    without_lost_frames,
+)
 from analysis.clinical.results import AngleRange
 from analysis.kinematics import Kinematics
 
@@ -331,14 +340,17 @@ def measure(
     *,
     kin: Kinematics | None = None,
     body: Body | None = None,
+    lost: Mapping[str, npt.NDArray[np.bool_]] | None = None,
 ) -> Measured:
     """The angles this recording measures (`angle_series`) and, for every other angle of
     `ANGLE_NAMES`, why not (``clinical_notes``: the skeleton lacks a segment, or the readings
     leave the body's physiological limits; `analysis.clinical.measured`); ``kin`` / ``body``:
-    the motion's kinematics and body parts when already computed (`geometry`)."""
+    the motion's kinematics and body parts when already computed (`geometry`); ``lost``: per
+    joint the capture lost ({"left_shoulder": (F,) bool}), the frames left out of its angles
+    (`analysis.clinical.measured.without_lost_frames`)."""
     geo = geometry(motion, method, kin=kin, body=body)
     raw = angles_of(geo)
-    measured = within_limits(raw)
+    measured = within_limits(without_lost_frames(raw, lost) if lost else raw)
     notes = {**missing_notes(geo, ANGLE_NAMES, raw), **_ankle_notes(geo, raw), **measured.notes}
     return Measured(measured.series, {name: notes[name] for name in ANGLE_NAMES if name in notes})
 

@@ -23,6 +23,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
 
 from analysis.assessment.compensations import NOT_RELIABLE, jitter
 from analysis.assessment.findings import TOLERANCE_DEG
@@ -108,6 +109,21 @@ def within_limits(series: Mapping[str, FloatArray]) -> Measured:
         else:
             kept[name] = np.where(beyond, np.nan, values)
     return Measured(kept, notes)
+
+
+def without_lost_frames(
+    series: Mapping[str, FloatArray], lost: Mapping[str, npt.NDArray[np.bool_]]
+) -> dict[str, FloatArray]:
+    """The series with the frames where the capture lost a joint left out (NaN) of that joint's
+    angles: ``lost`` {"left_shoulder": (F,) bool} blanks every ``shoulder_…_left`` angle there
+    (the upper arm was pointed from where the recorder put the lost shoulder)."""
+    out = dict(series)
+    for joint, frames in lost.items():
+        side, _, part = joint.partition("_")
+        for name in series:
+            if name.startswith(f"{part}_") and name.endswith(f"_{side}"):
+                out[name] = np.where(frames, np.nan, np.asarray(series[name], dtype=np.float64))
+    return out
 
 
 def _base(name: str) -> str:

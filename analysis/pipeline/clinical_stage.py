@@ -2,6 +2,8 @@
 rounded (the measures themselves are `analysis.clinical`'s).
 
 - `repetition_angles(series, repetitions)`: each repetition with its angle ranges (0.1°).
+- `lost_at_rate(lost, frame_time, motion)`: the frames where the capture lost a joint (marked at
+  import, `analysis.sources.ImportedRecording.lost_frames`) on the frames the analysis measures.
 - `workspace_summaries(motion, involved_joints)`: per hand, the reachable workspace (relative
   area, total and per quadrant) and a hull decimated to at most `MAX_HULL_VERTICES` vertices,
   only when the exercise involves an arm joint; ``{}`` otherwise.
@@ -13,6 +15,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import replace
 
 import numpy as np
+import numpy.typing as npt
 
 from analysis.bvh import Motion
 from analysis.clinical.angles import angle_ranges
@@ -23,6 +26,7 @@ from analysis.clinical.workspace import Workspace, covered_patch, reachable_work
 from analysis.kinematics import Kinematics
 from analysis.pipeline.results import RepetitionResult
 
+BoolArray = npt.NDArray[np.bool_]
 MAX_HULL_VERTICES = 32  # 96 coordinates and about 170 face indices per hand
 
 
@@ -39,6 +43,22 @@ def repetition_angles(
         replace(rep, clinical_angles=rounded(angle_ranges(dict(series), rep.start, rep.end)))
         for rep in repetitions
     )
+
+
+def lost_at_rate(
+    lost: Mapping[str, BoolArray], frame_time: float, motion: Motion
+) -> dict[str, BoolArray]:
+    """Per joint, the frames of ``lost`` (the recording's own frames, ``frame_time`` s apart)
+    on the frames of ``motion`` (the recording at the model's rate): a frame is lost where
+    either recorded frame it lies between is (the same frames at the same rate)."""
+    at_rate: dict[str, BoolArray] = {}
+    for joint, frames in lost.items():
+        marked = np.asarray(frames, dtype=bool)
+        # rounded: at the same rate k·t/t must stay k, not a hair above it (the next frame)
+        where = np.round(np.arange(motion.n_frames) * motion.frame_time / frame_time, 6)
+        where = np.clip(where, 0, marked.size - 1)
+        at_rate[joint] = marked[np.floor(where).astype(int)] | marked[np.ceil(where).astype(int)]
+    return at_rate
 
 
 def farthest_points(points: FloatArray, count: int) -> FloatArray:

@@ -35,7 +35,11 @@ from analysis.dtw.cost_blas import single_threaded_blas
 from analysis.feedback import Comment, LandmarkAssessment
 from analysis.feedback.advice import Advice
 from analysis.pipeline.advice_stage import judge_repetitions
-from analysis.pipeline.clinical_stage import repetition_angles, workspace_summaries
+from analysis.pipeline.clinical_stage import (
+    lost_at_rate,
+    repetition_angles,
+    workspace_summaries,
+)
 from analysis.pipeline.curves import angle_curves
 from analysis.pipeline.gestures import Pace
 from analysis.pipeline.judgement import Judgement
@@ -171,20 +175,25 @@ def analyse(
     *,
     match: MatchContext | None = None,
     own_pace: Pace | None = None,
+    lost_frames: Mapping[str, npt.NDArray[np.bool_]] | None = None,
 ) -> AnalysisResult:
     """Analyse one recording (see the module docstring); ``limits``: what a recording may be
     (`analysis.bvh.plausibility`, checked before anything is mapped or resampled); ``match``:
     the exercise's name and the clinic's other exercises, for a recording that does not fit
     (`analysis.pipeline.match`: then no repetition and no score); ``own_pace``: the patient's
     usual tempo and reach from an earlier session (`repetition_stage.session_pace`), which
-    paper 001's guidance judges this one against as well as against the tutor."""
+    paper 001's guidance judges this one against as well as against the tutor; ``lost_frames``:
+    per joint the capture lost in some of ``motion``'s frames (``"left_shoulder"``: (F,) bool,
+    `analysis.sources.ImportedRecording.lost_frames`), frames left out of that joint's clinical
+    angles (the count and scores read the motion as it is)."""
     timer = StageTimer(on_progress)
     # BLAS on one thread for the whole analysis: the DTW's cost blocks ask for that limit
     # hundreds of times a recording, and once it is held each ask only counts
     with single_threaded_blas():
         found = find_repetitions(motion, model, limits, match, timer)
         scored = score(found, model, (history, own_pace), timer) if found.fit.fits else Scored()
-        measures = measure_recording(found, scored, model, timer)
+        lost = lost_at_rate(lost_frames or {}, motion.frame_time, found.prepared.motion)
+        measures = measure_recording(found, scored, model, timer, lost)
         explained = explain(found, measures, scored, model, timer)
     if on_progress is not None:
         on_progress("done", 1.0)
@@ -255,17 +264,22 @@ def score(
 
 
 def measure_recording(
-    found: Found, scored: Scored, model: FittedModel, timer: StageTimer
+    found: Found,
+    scored: Scored,
+    model: FittedModel,
+    timer: StageTimer,
+    lost: Mapping[str, npt.NDArray[np.bool_]] | None = None,
 ) -> Measures:
     """Phase 3: the playback skeletons (the tutor at its own pace for a recording that does
-    not fit), the clinical angles and compensations, each repetition's angle ranges."""
+    not fit), the clinical angles and compensations, each repetition's angle ranges; ``lost``:
+    the frames (at the model's rate) left out of a lost joint's angles."""
     prepared = found.prepared
     with timer("adjustment"):
         shown = found.landmarks if found.fit.fits else ()
         playback = playback_arrays(prepared, shown, model, scored.gamma)
     with timer("clinical_angles"):  # only what the recording measures; notes say why not
         kin, body = prepared.kinematics, prepared.body
-        measured = measure(prepared.motion, kin=kin, body=body)
+        measured = measure(prepared.motion, kin=kin, body=body, lost=lost)
         angles = angle_ranges(measured.series)
         series = compensations(kin.positions, body) if found.fit.fits else {}
         repetitions = repetition_angles(measured.series, scored.repetitions)

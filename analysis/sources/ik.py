@@ -27,7 +27,7 @@ arm, forearm, hand, upper leg, lower leg and foot, named as `analysis.bvh.rigs` 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -38,6 +38,7 @@ from analysis.kinematics.retarget import min_rotation
 from analysis.sources.errors import CaptureFileError
 
 FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
 UNITS_PER_METRE = 100.0  # the Motion is written in centimetres, like most BVH files
 UP, LEFT, FORWARD = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 0, 1])
 DOWN = -UP
@@ -88,13 +89,16 @@ REQUIRED = (
 PLAIN = {name: name.replace("_", " ") for name in REQUIRED}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Solved:
-    """The motion and, per canonical point, the number of frames bridged by interpolation."""
+    """The motion and, per canonical point, the number of frames bridged by interpolation;
+    ``lost``: per shoulder (``left_shoulder``), the frames where it was lost (`lost_shoulders`),
+    only for a shoulder lost somewhere."""
 
     motion: Motion
     bridged: Mapping[str, int]
     estimated: tuple[str, ...]
+    lost: Mapping[str, BoolArray] = field(default_factory=dict)
 
 
 def bridge(track: FloatArray) -> tuple[FloatArray | None, int]:
@@ -314,7 +318,37 @@ def solve(points: Mapping[str, FloatArray], fps: float, smoothing: int = 1) -> S
     if not np.all(np.isfinite(frames)):
         raise CaptureFileError("The file's positions do not form a body (values out of range).")
     skeleton = standing_skeleton(usable, offsets)
-    return Solved(Motion(skeleton, frames, 1.0 / fps), bridged, estimated)
+    # a chest estimated from the shoulders carries them by construction: nothing to compare
+    lost = {} if "chest" in estimated else lost_shoulders(usable, rotations, offsets)
+    return Solved(Motion(skeleton, frames, 1.0 / fps), bridged, estimated, lost)
+
+
+# A tracked shoulder farther than this share of the shoulder width (the median distance between
+# the shoulders) from the place its chest carries it (its rest offset) was lost by the tracker,
+# not moved by the shoulder girdle: 0.15 is 5 cm on an adult's 33 cm. On the KERAAL CTK Kinect
+# take the shoulders lost while the elbows meet in front of the face sit 9-12 cm off (17 cm
+# towards the camera), its other frames within 3 cm (docs/EVALUATION.md).
+LOST_SHOULDER_SHARE = 0.15
+
+
+def lost_shoulders(
+    points: Mapping[str, FloatArray], rotations: FloatArray, offsets: FloatArray
+) -> dict[str, BoolArray]:
+    """Per shoulder lost in some frame, the frames (T,) where it was: the skeleton keeps it at
+    its carried place, but the upper arm is pointed from the tracked one, so the shoulder's
+    angles there are the tracker's error. Points in centimetres."""
+    chest = NAMES.index("Chest")
+    between = points["left_shoulder"] - points["right_shoulder"]
+    width = float(np.median(np.linalg.norm(between, axis=1)))
+    lost: dict[str, BoolArray] = {}
+    for side in ("left", "right"):
+        delta = points[f"{side}_shoulder"] - points["chest"]
+        local = np.einsum("tji,tj->ti", rotations[:, chest], delta)
+        away = np.linalg.norm(local - offsets[NAMES.index(f"{side.title()}UpperArm")], axis=1)
+        marked = away > LOST_SHOULDER_SHARE * width
+        if marked.any():
+            lost[f"{side}_shoulder"] = marked
+    return lost
 
 
 def standing_skeleton(points: Mapping[str, FloatArray], offsets: FloatArray) -> Skeleton:

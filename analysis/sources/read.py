@@ -97,12 +97,22 @@ def _imported(found: Found) -> ImportedRecording:
         notes.append(f"The file gives no times; {DEFAULT_FPS:g} frames per second was assumed.")
     solved = solve(points, fps)
     notes.extend(_gap_notes(solved, int(found.empty.sum()) if found.empty is not None else 0))
+    notes.extend(_lost_notes(solved))
     report = ImportReport(kind, layout, tuple(used), tuple(unused), tuple(notes))
-    return ImportedRecording(_with_warnings(solved.motion, report.warnings), report)
+    return ImportedRecording(_with_warnings(solved.motion, report.warnings), report, solved.lost)
 
 
 def _with_warnings(motion: Motion, warnings: tuple[str, ...]) -> Motion:
     return Motion(motion.skeleton, motion.frames, motion.frame_time, warnings)
+
+
+def _lost_notes(solved: Solved) -> list[str]:
+    """A note per joint the recorder lost (placed away from where the body carries it)."""
+    return [
+        f"The {name.replace('_', ' ')} was lost in {int(frames.sum())} frames (the recorder "
+        "placed it away from the body); those frames are left out of its angles."
+        for name, frames in solved.lost.items()
+    ]
 
 
 def _gap_notes(solved: Solved, empty: int = 0) -> list[str]:

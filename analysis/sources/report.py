@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
 
 from analysis.bvh.io import Motion
+
+BoolArray = npt.NDArray[np.bool_]
 
 KINDS = ("bvh", "kinect", "trc", "c3d", "mediapipe", "video", "vicon", "camera")
 
@@ -43,10 +49,16 @@ class ImportReport:
 
 @dataclass(frozen=True, eq=False)
 class ImportedRecording:
-    """A recording of any source as a `Motion` (skeleton and rotations) and what was found."""
+    """A recording of any source as a `Motion` (skeleton and rotations) and what was found.
+
+    ``lost_frames``: per joint the recorder lost in some frames (``"left_shoulder"``), a (F,)
+    boolean over the motion's frames, True where it was lost (`analysis.sources.ik.lost_shoulders`);
+    empty when none was (BVH files, landmark sources). The analysis leaves those frames out of
+    that joint's clinical angles (`analysis.pipeline.analyse`'s ``lost_frames``)."""
 
     motion: Motion
     report: ImportReport
+    lost_frames: Mapping[str, BoolArray] = field(default_factory=dict)
 
     @property
     def source(self) -> RecordingSource:

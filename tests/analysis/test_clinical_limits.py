@@ -344,3 +344,20 @@ def test_a_foot_jumping_between_frames_is_not_measurable_reliably():
     assert set(measured.series) == {"ankle_dorsiflexion_left"}
     note = measured.notes["ankle_dorsiflexion_right"]
     assert note.startswith(NOT_RELIABLE) and "from one frame to the next" in note
+
+
+def test_frames_where_the_capture_lost_a_shoulder_are_left_out_of_that_shoulders_angles_only():
+    motion = read(ABDUCTIONS[0])
+    lost = np.zeros(motion.n_frames, dtype=bool)
+    lost[20:40] = True
+    plain = measure(motion).series
+    marked = measure(motion, lost={"left_shoulder": lost}).series
+    blanked = [n for n in plain if n.startswith("shoulder_") and n.endswith("_left")]
+    assert {"shoulder_elevation_left", "shoulder_flexion_left"} <= set(blanked)
+    assert set(marked) == set(plain)
+    for name in plain:
+        if name in blanked:
+            assert np.isnan(marked[name][lost]).all()
+            np.testing.assert_array_equal(marked[name][~lost], plain[name][~lost])
+        else:  # the elbow, the other shoulder, the trunk: as measured
+            np.testing.assert_array_equal(marked[name], plain[name])

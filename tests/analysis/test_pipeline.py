@@ -140,3 +140,38 @@ def test_reduced_range_scores_lower_than_full_range():
     assert any(
         r["guidance"] and r["guidance"][0]["type"] == "incomplete" for r in weak["repetitions"]
     )
+
+
+def test_lost_frames_are_carried_to_the_models_frame_rate():
+    from analysis.bvh import Motion
+    from analysis.pipeline.clinical_stage import lost_at_rate
+
+    motion = read(DATA / "sessions/m07_s02_correct.bvh.gz")
+    lost = np.zeros(motion.n_frames, dtype=bool)
+    lost[3] = True
+    same = lost_at_rate({"left_shoulder": lost}, motion.frame_time, motion)["left_shoulder"]
+    np.testing.assert_array_equal(same, lost)
+    doubled = Motion(motion.skeleton, motion.frames, motion.frame_time / 2)
+    at_double = lost_at_rate({"left_shoulder": lost}, motion.frame_time, doubled)["left_shoulder"]
+    assert np.flatnonzero(at_double).tolist() == [5, 6, 7]  # 2.5, 3 and 3.5 recorded frames
+
+
+def test_a_lost_shoulder_leaves_its_angles_only_where_it_was_lost(models):
+    """The first repetition's frames marked lost: its left shoulder has no range there, the
+    repetitions and their scores are those of the recording without marks."""
+    motion = read(DATA / "sessions/m07_s02_correct.bvh.gz")
+    plain = analyse(motion, models["m07"]).summary
+    first = plain.repetitions[0]
+    lost = np.zeros(motion.n_frames, dtype=bool)
+    lost[first.start : first.end + 1] = True
+    marked = analyse(motion, models["m07"], lost_frames={"left_shoulder": lost}).summary
+    assert [(r.start, r.end, r.score) for r in marked.repetitions] == [
+        (r.start, r.end, r.score) for r in plain.repetitions
+    ]
+    assert "shoulder_elevation_left" in first.clinical_angles
+    assert "shoulder_elevation_left" not in marked.repetitions[0].clinical_angles
+    assert marked.repetitions[1].clinical_angles == plain.repetitions[1].clinical_angles
+    assert (
+        marked.repetitions[0].clinical_angles["shoulder_elevation_right"]
+        == (first.clinical_angles["shoulder_elevation_right"])
+    )

@@ -220,3 +220,28 @@ def test_without_chest_or_neck_the_chest_lies_under_the_head():
     assert np.all(
         chest[:, 0] < (points["left_shoulder"][:, 0] + points["right_shoulder"][:, 0]) / 2 - 0.02
     )
+
+
+def test_a_shoulder_the_recorder_puts_away_from_the_body_is_marked_lost_and_said(tmp_path):
+    """A Kinect shoulder dropped 10 cm below its place (the tracker lost it) in frames 10–15 is
+    marked lost there; a 3 cm shrug (the shoulder girdle moving) and the other side are not."""
+    points = standing()
+    points["left_shoulder"][10:16] += (0.0, -0.10, 0.0)
+    points["left_shoulder"][20:26] += (0.0, 0.03, 0.0)
+    path = write_layout("kinect_wide", points, FPS, tmp_path)
+    recording = read_recording(path.name, path.read_bytes())
+    assert set(recording.lost_frames) == {"left_shoulder"}
+    assert np.flatnonzero(recording.lost_frames["left_shoulder"]).tolist() == list(range(10, 16))
+    told = [w for w in recording.report.warnings if "shoulder" in w]
+    assert told == [
+        "The left shoulder was lost in 6 frames (the recorder placed it away from the body); "
+        "those frames are left out of its angles."
+    ]
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_a_body_whose_shoulders_stay_in_place_marks_no_frame_lost(layout, tmp_path):
+    path = write_layout(layout, standing(), FPS, tmp_path)
+    recording = read_recording(path.name, path.read_bytes())
+    assert recording.lost_frames == {}
+    assert not any("was lost" in w for w in recording.report.warnings)
