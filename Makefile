@@ -82,10 +82,11 @@ beat: deps
 	$(BIN)/celery -A workers beat --loglevel=INFO
 
 # The compiled kernels go into their cache first (tests/warm_kernels.py): otherwise every
-# process the suite starts compiles its own copy of them at once.
+# process the suite starts compiles its own copy of them at once. The 40 slowest test steps are
+# listed at the end (where the suite's time goes, docs/PERFORMANCE.md).
 test: deps
 	$(BIN)/python -m tests.warm_kernels
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder $(PYTEST_ARGS)
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder --durations=40 $(PYTEST_ARGS)
 
 # The suite keeps short fixed-seed versions of the long loops; their full runs are here: every
 # capture layout against every development session, 10,000 hostile files, the long fuzzing.

@@ -1,6 +1,7 @@
 """DTW speed against dtaidistance (C) and tslearn (numba), one run, same inputs.
 
     .venv/bin/python -m bench.bench_dtw [--repeats 5] [--markdown docs/sections/bench_dtw.md]
+        [--only batched]
 
 Cases (issue 3): 1-D 5,000 x 10,000; d = 66, 7,200 x 1,200; 64 repetitions of 90 frames x 66
 against one tutor repetition (batched); the same two pairs with the warping path; the Open-End DTW
@@ -204,10 +205,15 @@ def main(argv: list[str] | None = None) -> str:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--markdown", help="also write the section to this file")
+    parser.add_argument(
+        "--only", help="time only the cases whose name contains this text (e.g. batched)"
+    )
     args = parser.parse_args(argv)
     rng = np.random.default_rng(20261123)
     load0 = os.getloadavg()[0]
     todo, checks = cases(rng)
+    if args.only:
+        todo = [c for c in todo if args.only in c.name]
     results = time_cases(todo, args.repeats)
     pushes = push_times(rng, args.repeats)
     body = table(results, pushes, checks, args.repeats)
@@ -215,9 +221,11 @@ def main(argv: list[str] | None = None) -> str:
         f"{dt.date.today().isoformat()}, {model_name()}, {os.cpu_count()} cores; "
         f"load average {load0:.2f} before, {os.getloadavg()[0]:.2f} after"
     )
+    only = f" --only '{args.only}'" if args.only else ""
     text = (
         "## DTW speed (bench/bench_dtw.py)\n\n"
-        f"`.venv/bin/python -m bench.bench_dtw --repeats {args.repeats}` - {stamp}.\n\n{body}\n"
+        f"`.venv/bin/python -m bench.bench_dtw --repeats {args.repeats}{only}` - {stamp}.\n\n"
+        f"{body}\n"
     )
     print(text)
     if args.markdown:

@@ -322,15 +322,20 @@ def _run_batch(
     frames, offsets = _stack(xs, m)
     N, B = int(offsets[-1]), len(frames)
     _, _, ci = prepare(np.concatenate(frames), ya, opt)
-    bands = {n: band_limits(n, m, opt) for n in {len(f) for f in frames}}
-    lo = np.concatenate([bands[len(f)][0] for f in frames])
-    hi = np.concatenate([bands[len(f)][1] for f in frames])
+    if opt.window is None:  # every row spans the whole reference (the common case, no copies)
+        lo, hi = np.zeros(N, np.int64), np.full(N, m - 1, np.int64)
+    else:
+        bands = {n: band_limits(n, m, opt) for n in {len(f) for f in frames}}
+        lo = np.concatenate([bands[len(f)][0] for f in frames])
+        hi = np.concatenate([bands[len(f)][1] for f in frames])
+    if not paths and _prunable(opt, ci):  # no path buffers: costs only
+        none = np.zeros(B, np.int64)
+        r = _Batch(frames, ya, np.empty(B), np.empty((1, 2), np.int64), none, none)
+        pruned.batch_distances(ci, offsets, lo, hi, r.costs)
+        return _checked(r)
     poffs = np.concatenate([[0], np.cumsum(np.diff(offsets) + m)]).astype(np.int64)
     r = _Batch(frames, ya, np.empty(B), np.empty((int(poffs[-1]) if paths else 1, 2), np.int64),
                poffs, np.zeros(B, np.int64))  # fmt: skip
-    if not paths and _prunable(opt, ci):
-        pruned.batch_distances(ci, offsets, lo, hi, r.costs)
-        return _checked(r)
     C = np.empty((N, m))
     flags = (bool(opt.open_begin), bool(opt.open_end), bool(opt.path_length_weighting))
     tail = (r.costs, r.paths, r.lengths)

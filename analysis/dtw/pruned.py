@@ -193,8 +193,12 @@ def batch_distances(
     B, m = len(offsets) - 1, ci.y.shape[0]
     euc = ci.mode == MODE_EUC
     work = int(offsets[-1]) * m * (1 + ci.x.shape[1] // 16) // PRUNED_SHARE
+    slices = cuts(B, work)
+    if len(slices) == 1:  # small batches (the usual case): this thread, no hand-over
+        batch(ci.x, offsets, ci.y, ci.wj, euc, lo, hi, costs, 0, B)
+        return
     calls: list[Callable[[], object]] = [
         functools.partial(batch, ci.x, offsets, ci.y, ci.wj, euc, lo, hi, costs, a, b)
-        for a, b in cuts(B, work)
+        for a, b in slices
     ]
     concurrently(calls)

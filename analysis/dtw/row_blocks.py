@@ -84,6 +84,8 @@ PARALLEL_MIN_CELLS = 2_000_000
 def cuts(count: int, work: int) -> list[tuple[int, int]]:
     """[0, count) in one contiguous slice per worker thread (one slice for small problems)."""
     workers = min(nb.get_num_threads(), count) if work > PARALLEL_MIN_CELLS else 1
+    if workers <= 1:
+        return [(0, count)]
     edges = np.linspace(0, count, workers + 1).astype(int)
     return list(zip(edges[:-1].tolist(), edges[1:].tolist(), strict=True))
 
