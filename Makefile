@@ -22,6 +22,8 @@ TEST_WORKERS ?= 2
 # default, pip's --no-compile): of the tens of thousands of modules installed, Python compiles
 # the few it imports, once, at their first import.
 UV := $(BIN)/uv
+# A comma inside `$(call install,...)` would end its argument: extras are joined with this.
+comma := ,
 define install
 if [ -x $(UV) ]; then \
 	options="$$($(PYTHON) deploy/uv_options.py)" && mapfile -t options <<< "$$options" && \
@@ -43,7 +45,7 @@ $(VENV)/.stamp-python: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.stamp-bench: pyproject.toml | $(VENV)/.stamp-python
-	$(call install,-e '.[dev,bench]')
+	$(call install,-e '.[dev$(comma)bench]')
 	touch $@
 
 node_modules/.stamp: package.json package-lock.json
@@ -156,7 +158,7 @@ bench-scale: $(VENV)/.stamp-python
 	DATABASE_URL=$$url $(BIN)/python -m bench.bench_scale
 
 $(VENV)/.stamp-load: pyproject.toml | $(VENV)/.stamp-python
-	$(call install,-e '.[dev,load]')
+	$(call install,-e '.[dev$(comma)load]')
 	touch $@
 
 # Load: gunicorn + 2 Celery workers + PostgreSQL + Redis on loopback, 50 browsing therapists and
