@@ -123,23 +123,31 @@ def _place(a: FloatArray, base: FloatArray, t: tuple[float, float, float], out: 
 
 
 @numba.njit(cache=True, nogil=True)
+def _chain_frame(
+    q: FloatArray, t: FloatArray, parents: npt.NDArray[np.int64], glob: FloatArray, pos: FloatArray
+) -> None:
+    """One frame down the chain: (J, 4) local rotations and (J, 3) translations into (J, 4)
+    world rotations and (J, 3) world positions (parents before children)."""
+    for j in range(q.shape[0]):
+        p = parents[j]
+        bw, bx, by, bz = q[j, 0], q[j, 1], q[j, 2], q[j, 3]
+        tx, ty, tz = t[j, 0], t[j, 1], t[j, 2]
+        if p < 0:
+            glob[j, 0], glob[j, 1], glob[j, 2], glob[j, 3] = bw, bx, by, bz
+            pos[j, 0], pos[j, 1], pos[j, 2] = tx, ty, tz
+            continue
+        _compose(glob[p], (bw, bx, by, bz), glob[j])
+        _place(glob[p], pos[p], (tx, ty, tz), pos[j])
+
+
+@numba.njit(cache=True, nogil=True)
 def _chain(
     local_q: FloatArray, local_t: FloatArray, parents: npt.NDArray[np.int64]
 ) -> tuple[FloatArray, FloatArray]:
-    n_frames, n_joints = local_q.shape[0], local_q.shape[1]
     glob = np.empty_like(local_q)
     pos = np.empty_like(local_t)
-    for f in range(n_frames):
-        for j in range(n_joints):
-            p = parents[j]
-            bw, bx, by, bz = local_q[f, j, 0], local_q[f, j, 1], local_q[f, j, 2], local_q[f, j, 3]
-            tx, ty, tz = local_t[f, j, 0], local_t[f, j, 1], local_t[f, j, 2]
-            if p < 0:
-                glob[f, j, 0], glob[f, j, 1], glob[f, j, 2], glob[f, j, 3] = bw, bx, by, bz
-                pos[f, j, 0], pos[f, j, 1], pos[f, j, 2] = tx, ty, tz
-                continue
-            _compose(glob[f, p], (bw, bx, by, bz), glob[f, j])
-            _place(glob[f, p], pos[f, p], (tx, ty, tz), pos[f, j])
+    for f in range(local_q.shape[0]):
+        _chain_frame(local_q[f], local_t[f], parents, glob[f], pos[f])
     return glob, pos
 
 
@@ -214,20 +222,10 @@ def _chain_positions(
     local_q: FloatArray, local_t: FloatArray, parents: npt.NDArray[np.int64]
 ) -> FloatArray:
     """`_chain`'s positions: the same products in the same order, frame by frame."""
-    n_frames, n_joints = local_q.shape[0], local_q.shape[1]
-    glob = np.empty((n_joints, 4))
+    glob = np.empty((local_q.shape[1], 4))
     pos = np.empty_like(local_t)
-    for f in range(n_frames):
-        for j in range(n_joints):
-            p = parents[j]
-            bw, bx, by, bz = local_q[f, j, 0], local_q[f, j, 1], local_q[f, j, 2], local_q[f, j, 3]
-            tx, ty, tz = local_t[f, j, 0], local_t[f, j, 1], local_t[f, j, 2]
-            if p < 0:
-                glob[j, 0], glob[j, 1], glob[j, 2], glob[j, 3] = bw, bx, by, bz
-                pos[f, j, 0], pos[f, j, 1], pos[f, j, 2] = tx, ty, tz
-                continue
-            _compose(glob[p], (bw, bx, by, bz), glob[j])
-            _place(glob[p], pos[f, p], (tx, ty, tz), pos[f, j])
+    for f in range(local_q.shape[0]):
+        _chain_frame(local_q[f], local_t[f], parents, glob, pos[f])
     return pos
 
 
